@@ -1,0 +1,1 @@
+"""Laboratory and field test protocols built on :class:`sim.simulation.Simulation`."""
