@@ -17,6 +17,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .errors import InputError
+
 __all__ = [
     "damage_ratio",
     "heterogeneity_index",
@@ -41,21 +43,21 @@ _TABLE_COLUMNS = ("mineral", "class", "d_min_um", "d_max_um", "frequency_pct",
 def _as_weights(weights, name="weights"):
     w = np.asarray(weights, dtype=np.float64)
     if w.ndim != 1 or w.size == 0:
-        raise ValueError(f"{name}: expected a non-empty 1-D array, got shape {w.shape}")
+        raise InputError(f"{name}: expected a non-empty 1-D array, got shape {w.shape}")
     if not np.all(np.isfinite(w)) or np.any(w < 0):
-        raise ValueError(f"{name}: expected finite non-negative values, got {w.tolist()}")
+        raise InputError(f"{name}: expected finite non-negative values, got {w.tolist()}")
     total = w.sum()
     if total <= 0:
-        raise ValueError(f"{name}: expected a positive sum, got {total}")
+        raise InputError(f"{name}: expected a positive sum, got {total}")
     return w / total
 
 
 def _as_sizes(values, shape_hint, name):
     r = np.asarray(values, dtype=np.float64)
     if not np.all(np.isfinite(r)) or np.any(r <= 0):
-        raise ValueError(f"{name}: expected finite positive sizes, got {r.tolist()}")
+        raise InputError(f"{name}: expected finite positive sizes, got {r.tolist()}")
     if shape_hint is not None and r.shape != shape_hint:
-        raise ValueError(f"{name}: expected shape {shape_hint}, got {r.shape}")
+        raise InputError(f"{name}: expected shape {shape_hint}, got {r.shape}")
     return r
 
 
@@ -77,7 +79,7 @@ def damage_ratio(area_tensile, area_shear):
 
     Raises
     ------
-    ValueError
+    InputError
         If an area is negative or not finite.
 
     Notes
@@ -97,7 +99,7 @@ def damage_ratio(area_tensile, area_shear):
     a_s = np.asarray(area_shear, dtype=np.float64)
     for name, a in (("area_tensile", a_t), ("area_shear", a_s)):
         if not np.all(np.isfinite(a)) or np.any(a < 0):
-            raise ValueError(f"{name}: expected finite areas >= 0, got {a.tolist()}")
+            raise InputError(f"{name}: expected finite areas >= 0, got {a.tolist()}")
     a_t, a_s = np.broadcast_arrays(a_t, a_s)
     p = np.full(a_t.shape, np.nan)
     ok = a_s > 0
@@ -124,7 +126,7 @@ def heterogeneity_index(weights, radii):
 
     Raises
     ------
-    ValueError
+    InputError
         Wrong shapes, negative weights, non-positive sizes.
 
     Notes
@@ -170,7 +172,7 @@ def mhi(weights, class_means, *, frequencies=None, r_a=None):
 
     Raises
     ------
-    ValueError
+    InputError
         Wrong shapes, negative weights or frequencies, non-positive sizes.
 
     Notes
@@ -192,17 +194,17 @@ def mhi(weights, class_means, *, frequencies=None, r_a=None):
     else:
         f = np.asarray(frequencies, dtype=np.float64)
         if f.shape != rc.shape or not np.all(np.isfinite(f)) or np.any(f < 0):
-            raise ValueError(f"frequencies: expected finite values >= 0 of shape {rc.shape}")
+            raise InputError(f"frequencies: expected finite values >= 0 of shape {rc.shape}")
         rows = f.sum(axis=1)
         if np.any(rows <= 0):
-            raise ValueError("frequencies: every mineral needs a positive total frequency")
+            raise InputError("frequencies: every mineral needs a positive total frequency")
         r_i = (f * rc).sum(axis=1) / rows
     if r_a is None:
         r_a = float(np.dot(w, r_i))
     else:
         r_a = float(r_a)
         if not np.isfinite(r_a) or r_a <= 0:
-            raise ValueError(f"r_a: expected a positive size, got {r_a}")
+            raise InputError(f"r_a: expected a positive size, got {r_a}")
     value = float(np.sqrt(np.sum((rc / r_a - 1.0) ** 2)))
     return value, r_a
 
@@ -210,16 +212,16 @@ def mhi(weights, class_means, *, frequencies=None, r_a=None):
 def _check_table(table):
     missing = [c for c in _TABLE_COLUMNS if c not in getattr(table, "columns", ())]
     if missing:
-        raise ValueError(f"grain-size table: missing column(s) {missing}; "
+        raise InputError(f"grain-size table: missing column(s) {missing}; "
                          f"expected {list(_TABLE_COLUMNS)}")
     bad = set(table["class"]) - set(CLASS_ORDER)
     if bad:
-        raise ValueError(f"grain-size table: column 'class' has {sorted(bad)}; "
+        raise InputError(f"grain-size table: column 'class' has {sorted(bad)}; "
                          f"expected fine|medium|coarse")
     d_min = table["d_min_um"].to_numpy(float)
     d_max = table["d_max_um"].to_numpy(float)
     if np.any(~np.isfinite(d_min)) or np.any(d_min <= 0) or np.any(d_max < d_min):
-        raise ValueError("grain-size table: expected 0 < d_min_um <= d_max_um on every row")
+        raise InputError("grain-size table: expected 0 < d_min_um <= d_max_um on every row")
 
 
 def class_means_from_table(table, *, convention="N1"):
@@ -246,14 +248,14 @@ def class_means_from_table(table, *, convention="N1"):
 
     Raises
     ------
-    ValueError
+    InputError
         Missing columns, unknown class or convention, a missing class, bad sizes.
     """
     if convention not in CONVENTIONS:
-        raise ValueError(f"convention: expected one of {CONVENTIONS}, got {convention!r}")
+        raise InputError(f"convention: expected one of {CONVENTIONS}, got {convention!r}")
     _check_table(table)
     if convention == "measured" and "d_mean_um" not in table.columns:
-        raise ValueError("grain-size table: convention 'measured' needs column d_mean_um")
+        raise InputError("grain-size table: convention 'measured' needs column d_mean_um")
     minerals = list(dict.fromkeys(table["mineral"].astype(str)))
     m = len(minerals)
     means = np.zeros((m, 3))
@@ -265,7 +267,7 @@ def class_means_from_table(table, *, convention="N1"):
         for c, cls in enumerate(CLASS_ORDER):
             row = rows[rows["class"] == cls]
             if len(row) != 1:
-                raise ValueError(f"grain-size table: mineral {name!r} needs exactly one "
+                raise InputError(f"grain-size table: mineral {name!r} needs exactly one "
                                  f"{cls!r} row, found {len(row)}")
             lo, hi = float(row["d_min_um"].iloc[0]), float(row["d_max_um"].iloc[0])
             if convention == "N1":
@@ -277,7 +279,7 @@ def class_means_from_table(table, *, convention="N1"):
                 means[i, c] = dm if np.isfinite(dm) and dm > 0 else 0.5 * (lo + hi)
             freqs[i, c] = float(row["frequency_pct"].iloc[0])
     if np.any(freqs.sum(axis=1) <= 0):
-        raise ValueError("grain-size table: every mineral needs a positive total frequency_pct")
+        raise InputError("grain-size table: every mineral needs a positive total frequency_pct")
     freqs = freqs / freqs.sum(axis=1, keepdims=True)
     return minerals, _as_weights(weights, "volume_fraction_pct"), means, freqs
 
@@ -301,7 +303,7 @@ def indices_from_table(table, *, convention="N1"):
 
     Raises
     ------
-    ValueError
+    InputError
         Bad table (see :func:`class_means_from_table`).
 
     Notes
@@ -341,9 +343,9 @@ def split_range(edges, d_min, d_max):
     """
     e = np.asarray(edges, dtype=np.float64)
     if e.shape != (4,) or np.any(np.diff(e) <= 0):
-        raise ValueError(f"edges: expected 4 increasing values, got {e.tolist()}")
+        raise InputError(f"edges: expected 4 increasing values, got {e.tolist()}")
     if not (0 < d_min < d_max):
-        raise ValueError(f"range: expected 0 < d_min < d_max, got {d_min}, {d_max}")
+        raise InputError(f"range: expected 0 < d_min < d_max, got {d_min}, {d_max}")
     return d_min + (e - e[0]) * (d_max - d_min) / (e[-1] - e[0])
 
 
@@ -370,7 +372,7 @@ def table_with_ranges(table, ranges_um):
     for name, (lo, hi) in ranges_um.items():
         sel = out["mineral"].astype(str) == str(name)
         if not sel.any():
-            raise ValueError(f"ranges_um: mineral {name!r} is not in the table")
+            raise InputError(f"ranges_um: mineral {name!r} is not in the table")
         rows = out[sel].set_index("class").loc[list(CLASS_ORDER)]
         edges = [rows["d_min_um"].iloc[0], rows["d_max_um"].iloc[0],
                  rows["d_max_um"].iloc[1], rows["d_max_um"].iloc[2]]

@@ -1,0 +1,273 @@
+"""Damage ratio P per image and per specimen x test x stage (``damage.csv``), with outlier flags.
+
+P = A_T / A_S (thesis Equ. 3-1, :func:`semkit.indices.damage_ratio`). Per image, A_T and A_S
+are the summed areas of the cracks typed ``tensile`` and ``shear`` in ``cracks.csv``; a
+``mixed`` crack is split by its measured tensile share (column ``tensile_fraction``) when
+present, otherwise it is left out of both sums (``mixed="exclude"``, the default).
+
+Outlier rule (documented, not tuned per data set): within one test (all specimens and stages
+of, e.g., ``triaxial``), an image's P is flagged when its modified z-score
+``0.6745 |P - median| / MAD`` exceeds :data:`OUTLIER_Z` = 3.5 (Iglewicz & Hoaglin 1993). At
+least :data:`OUTLIER_MIN_N` finite values are needed, otherwise nothing is flagged. Flagged
+images stay in ``images.csv`` and in ``P_mean_all``; ``P_mean`` and ``P_pooled`` leave them out.
+On thesis Table 3-3 this flags exactly the triaxial 6.05.
+"""
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+from .errors import InputError
+from .indices import damage_ratio
+
+__all__ = ["p_status", "image_damage", "flag_outliers", "damage_table", "plot_p_by_stage",
+           "STAGE_ORDER", "OUTLIER_Z", "OUTLIER_MIN_N"]
+
+#: Order of the loading stages on the P-by-stage plot and in ``damage.csv``.
+STAGE_ORDER = ("pre-test", "initiating", "propagation", "failure")
+#: Modified z-score above which an image's P is flagged as an outlier.
+OUTLIER_Z = 3.5
+#: Fewest finite P values in a test for the outlier rule to apply.
+OUTLIER_MIN_N = 5
+#: ``mixed`` crack handling in A_T / A_S.
+MIXED_MODES = ("exclude", "split", "tensile", "shear")
+
+
+def p_status(area_tensile, area_shear):
+    """Why P is or is not defined for each image.
+
+    Parameters
+    ----------
+    area_tensile, area_shear : array_like of float
+        A_T and A_S (same unit), >= 0.
+
+    Returns
+    -------
+    status : ndarray of str
+        ``"ok"`` (A_S > 0), ``"no_shear"`` (A_S = 0 < A_T: P undefined, reported as NaN, not
+        inf) or ``"no_cracks"`` (A_T = A_S = 0).
+
+    Examples
+    --------
+    >>> p_status([1.0, 2.0, 0.0], [1.0, 0.0, 0.0]).tolist()
+    ['ok', 'no_shear', 'no_cracks']
+    """
+    a_t, a_s = np.broadcast_arrays(np.asarray(area_tensile, float),
+                                   np.asarray(area_shear, float))
+    out = np.where(a_s > 0, "ok", np.where(a_t > 0, "no_shear", "no_cracks"))
+    return out.astype(object).astype(str)
+
+
+def image_damage(cracks, *, mixed="exclude"):
+    """Per-image A_T, A_S, P and status from a ``cracks.csv`` table.
+
+    Parameters
+    ----------
+    cracks : pandas.DataFrame
+        Columns ``image, area_um2, type_post`` (optional ``tensile_fraction`` in [0, 1]).
+    mixed : {"exclude", "split", "tensile", "shear"}
+        How a mixed crack's area counts (module docstring). ``split`` uses
+        ``tensile_fraction`` (0.5 where it is missing).
+
+    Returns
+    -------
+    table : pandas.DataFrame
+        One row per image: ``image, area_T_um2, area_S_um2, area_mixed_um2, P, P_status``.
+
+    Raises
+    ------
+    InputError
+        Missing columns or unknown ``mixed``.
+
+    Notes
+    -----
+    P = A_T / A_S (Equ. 3-1); NaN with ``P_status`` ``no_shear``/``no_cracks`` when A_S = 0.
+    """
+    for col in ("image", "area_um2", "type_post"):
+        if col not in cracks.columns:
+            raise InputError(f"cracks table: missing column {col!r}")
+    if mixed not in MIXED_MODES:
+        raise InputError(f"mixed: expected one of {MIXED_MODES}, got {mixed!r}")
+    c = cracks
+    area = c["area_um2"].to_numpy(float)
+    kind = c["type_post"].astype(str).to_numpy()
+    if "tensile_fraction" in c.columns:
+        ft = np.nan_to_num(c["tensile_fraction"].to_numpy(float), nan=0.5)
+    else:
+        ft = np.full(len(c), 0.5)
+    ft_mixed = {"exclude": 0.0, "tensile": 1.0, "shear": 0.0}
+    is_m = kind == "mixed"
+    a_t = np.where(kind == "tensile", area, 0.0)
+    a_s = np.where(kind == "shear", area, 0.0)
+    if mixed == "split":
+        a_t = a_t + np.where(is_m, area * ft, 0.0)
+        a_s = a_s + np.where(is_m, area * (1.0 - ft), 0.0)
+    elif mixed != "exclude":
+        a_t = a_t + np.where(is_m, area * ft_mixed[mixed], 0.0)
+        a_s = a_s + np.where(is_m, area * (1.0 - ft_mixed[mixed]), 0.0)
+    df = pd.DataFrame({"image": c["image"].to_numpy(), "area_T_um2": a_t, "area_S_um2": a_s,
+                       "area_mixed_um2": np.where(is_m, area, 0.0)})
+    out = df.groupby("image", sort=False, as_index=False).sum()
+    out["P"] = damage_ratio(out["area_T_um2"].to_numpy(), out["area_S_um2"].to_numpy())
+    out["P_status"] = p_status(out["area_T_um2"], out["area_S_um2"])
+    return out
+
+
+def flag_outliers(values, *, z=OUTLIER_Z, min_n=OUTLIER_MIN_N):
+    """Flag outliers by the modified z-score (median / MAD) rule.
+
+    Parameters
+    ----------
+    values : (N,) array_like of float
+        NaN entries are ignored (never flagged).
+    z : float
+        Threshold on ``0.6745 |v - median| / MAD``.
+    min_n : int
+        With fewer finite values nothing is flagged.
+
+    Returns
+    -------
+    flags : (N,) ndarray of bool
+
+    Notes
+    -----
+    Iglewicz & Hoaglin (1993). When MAD = 0 (over half the values equal), any value differing
+    from the median is flagged.
+
+    Examples
+    --------
+    >>> flag_outliers([0.66, 1.12, 0.81, 0.76, 1.67, 6.05, 1.09, 2.17]).tolist()
+    [False, False, False, False, False, True, False, False]
+    """
+    v = np.asarray(values, dtype=np.float64)
+    ok = np.isfinite(v)
+    flags = np.zeros(v.shape, dtype=bool)
+    if ok.sum() < min_n:
+        return flags
+    med = np.median(v[ok])
+    mad = np.median(np.abs(v[ok] - med))
+    if mad == 0:
+        flags[ok] = v[ok] != med
+    else:
+        flags[ok] = 0.6745 * np.abs(v[ok] - med) / mad > z
+    return flags
+
+
+def _stage_key(stage):
+    s = str(stage)
+    return (STAGE_ORDER.index(s), s) if s in STAGE_ORDER else (len(STAGE_ORDER), s)
+
+
+def damage_table(images, manifest=None, *, z=OUTLIER_Z, min_n=OUTLIER_MIN_N):
+    """Aggregate per-image P into ``damage.csv`` rows (specimen x test x stage).
+
+    Parameters
+    ----------
+    images : pandas.DataFrame
+        Per-image table with ``image`` and ``P``; optionally ``area_T_um2, area_S_um2`` (for
+        the pooled ratio) and ``specimen, test, stage`` (else taken from ``manifest``).
+    manifest : pandas.DataFrame, optional
+        ``manifest.csv`` (``image, specimen, test, stage``), joined on ``image``.
+    z, min_n : float, int
+        Outlier rule (:func:`flag_outliers`), applied per ``test``.
+
+    Returns
+    -------
+    images_flagged : pandas.DataFrame
+        ``images`` with ``specimen, test, stage`` and a boolean ``P_outlier``.
+    damage : pandas.DataFrame
+        One row per (specimen, test, stage): ``n_images, n_no_shear, n_outliers,
+        outlier_images, P_mean`` (mean of finite per-image P, outliers left out),
+        ``P_mean_all`` (outliers kept), ``P_median, P_pooled`` (sum A_T / sum A_S over the
+        non-outlier images, including those with A_S = 0; NaN without areas),
+        ``area_T_um2, area_S_um2``.
+
+    Raises
+    ------
+    InputError
+        Missing columns, or images absent from the manifest.
+    """
+    df = images.copy()
+    if "image" not in df.columns or "P" not in df.columns:
+        raise InputError("images table: expected columns 'image' and 'P'")
+    keys = ("specimen", "test", "stage")
+    if manifest is not None:
+        miss = [k for k in ("image",) + keys if k not in manifest.columns]
+        if miss:
+            raise InputError(f"manifest.csv: missing column(s) {miss}")
+        df = df.drop(columns=[k for k in keys if k in df.columns])
+        df = df.merge(manifest[["image", *keys]], on="image", how="left")
+    for k in keys:
+        if k not in df.columns:
+            raise InputError(f"images table: no {k!r} column and no manifest given")
+    lost = df.loc[df[list(keys)].isna().any(axis=1), "image"].tolist()
+    if lost:
+        raise InputError(f"manifest.csv: no specimen/test/stage for image(s) {lost[:5]}")
+    df["P"] = df["P"].astype(float)
+    df["P_outlier"] = False
+    for _, idx in df.groupby("test", sort=False).groups.items():
+        df.loc[idx, "P_outlier"] = flag_outliers(df.loc[idx, "P"].to_numpy(), z=z, min_n=min_n)
+    has_area = "area_T_um2" in df.columns and "area_S_um2" in df.columns
+    rows = []
+    for (spec, test, stage), g in df.groupby(list(keys), sort=False):
+        keep = g[~g["P_outlier"]]
+        p_keep = keep["P"].to_numpy()
+        p_all = g["P"].to_numpy()
+        a_t = keep["area_T_um2"].sum() if has_area else np.nan
+        a_s = keep["area_S_um2"].sum() if has_area else np.nan
+        fin = np.isfinite(p_keep)
+        rows.append(dict(
+            specimen=spec, test=test, stage=stage, n_images=len(g),
+            n_no_shear=int((~np.isfinite(p_all)).sum()),
+            n_outliers=int(g["P_outlier"].sum()),
+            outlier_images=";".join(map(str, g.loc[g["P_outlier"], "image"])),
+            P_mean=float(p_keep[fin].mean()) if fin.any() else np.nan,
+            P_mean_all=float(np.nanmean(p_all)) if np.isfinite(p_all).any() else np.nan,
+            P_median=float(np.median(p_keep[fin])) if fin.any() else np.nan,
+            P_pooled=float(damage_ratio(a_t, a_s)) if has_area else np.nan,
+            area_T_um2=a_t, area_S_um2=a_s))
+    dmg = pd.DataFrame(rows)
+    if len(dmg):
+        order = sorted(range(len(dmg)), key=lambda i: (str(dmg.specimen[i]), str(dmg.test[i]),
+                                                       _stage_key(dmg.stage[i])))
+        dmg = dmg.iloc[order].reset_index(drop=True)
+    return df, dmg
+
+
+def plot_p_by_stage(damage, path=None, *, ax=None):
+    """Plot P (mean per stage, outliers left out) by loading stage, one line per test.
+
+    Parameters
+    ----------
+    damage : pandas.DataFrame
+        Output of :func:`damage_table`.
+    path : str or Path, optional
+        Write a PNG here (written to a temporary name, then renamed).
+    ax : matplotlib Axes, optional
+
+    Returns
+    -------
+    fig : matplotlib Figure
+    """
+    import os
+
+    import matplotlib
+    if ax is None:
+        matplotlib.use("Agg", force=False)
+    import matplotlib.pyplot as plt
+    fig = ax.figure if ax is not None else plt.figure(figsize=(5, 3.5))
+    ax = ax if ax is not None else fig.add_subplot(111)
+    for (spec, test), g in damage.groupby(["specimen", "test"], sort=False):
+        g = g.iloc[sorted(range(len(g)), key=lambda i: _stage_key(g.stage.iloc[i]))]
+        ax.plot(g["stage"].astype(str), g["P_mean"], "o-", label=f"{test} ({spec})")
+    ax.axhline(1.0, color="0.6", lw=0.8, ls="--")
+    ax.set_xlabel("stage")
+    ax.set_ylabel("P = A_T / A_S (Equ. 3-1)")
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    if path is not None:
+        path = str(path)
+        tmp = path + ".tmp.png"
+        fig.savefig(tmp, dpi=120)
+        os.replace(tmp, path)
+    return fig
