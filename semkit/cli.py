@@ -1,0 +1,143 @@
+"""``semkit`` command line: a thin argparse layer over :mod:`semkit.pipeline` (no maths here).
+
+Exit status: 0 all images analysed; 1 the batch finished but some images failed (a one-line
+summary on stderr, details in ``images.csv``); 2 bad input (bad flag value, missing folder,
+unreadable config); 130 interrupted (finished results are kept).
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+
+from .errors import InputError
+
+__all__ = ["main", "build_parser"]
+
+#: keys a --config YAML file may set (the API keywords of analyse_folder)
+_ANALYSE_KEYS = ("threshold", "flatten", "denoise_sigma_px", "despeckle", "min_area_um2",
+                 "max_hole_px", "length", "exclude_pores", "pixel_size_um", "jobs", "progress",
+                 "overlays")
+
+
+def _version():
+    from importlib.metadata import PackageNotFoundError, version
+    try:
+        return version("rockkit")
+    except PackageNotFoundError:
+        return "unknown"
+
+
+def _add_analyse(sub):
+    p = sub.add_parser("analyse", aliases=["analyze"], help="measure cracks in a folder of images",
+                       description="Threshold, clean, label and measure cracks in every image of "
+                                   "DIR; write images.csv, cracks.csv and overlays/ to --out.")
+    p.add_argument("folder", metavar="DIR", help="folder of images (manifest.csv optional)")
+    p.add_argument("--out", required=True, metavar="OUT", help="output folder")
+    p.add_argument("--threshold", default=None, metavar="METHOD",
+                   help="auto (default) | otsu | local | manual:VALUE")
+    p.add_argument("--flatten", default=None, choices=["polynomial", "gaussian", "none"],
+                   help="illumination flattening (default polynomial)")
+    p.add_argument("--denoise-sigma-px", type=float, default=None, metavar="PX",
+                   help="Gaussian denoising before thresholding, px (default 0.7; 0 = off)")
+    p.add_argument("--despeckle", default=None, choices=["specks", "median", "none"],
+                   help="specks (default: isolated specks only) | median (ImageJ 3x3; erases "
+                        "1-px cracks) | none")
+    p.add_argument("--min-area-um2", "--min-area", dest="min_area_um2", type=float, default=None,
+                   metavar="UM2", help="remove objects smaller than this area, µm²")
+    p.add_argument("--max-hole-px", type=int, default=None, metavar="PX",
+                   help="fill holes up to this area, px (default 100; 0 = fill all, as ImageJ)")
+    p.add_argument("--pixel-size-um", "--pixel-size", dest="pixel_size_um", type=float,
+                   default=None, metavar="UM",
+                   help="pixel size when manifest, TIFF metadata and magnification give none")
+    p.add_argument("--no-length", dest="length", action="store_false", default=None,
+                   help="skip skeletons and lengths")
+    p.add_argument("--keep-pores", dest="exclude_pores", action="store_false", default=None,
+                   help="count round pores as cracks")
+    p.add_argument("--no-overlay", dest="overlays", action="store_false", default=None,
+                   help="do not write overlay PNGs")
+    p.add_argument("--jobs", type=int, default=None, metavar="N",
+                   help="worker processes (default: all cores)")
+    p.add_argument("--no-progress", dest="progress", action="store_false", default=None,
+                   help="no progress bar")
+    p.add_argument("--config", metavar="FILE.yaml", help="options from YAML (flags win)")
+    p.set_defaults(run=_run_analyse)
+
+
+def _add_synth(sub):
+    p = sub.add_parser("synth", help="write the synthetic sample image set with ground truth")
+    p.add_argument("out", metavar="OUT", help="output folder")
+    p.add_argument("--seed", type=int, default=2026)
+    p.set_defaults(run=_run_synth)
+
+
+def build_parser():
+    """The argparse parser of ``semkit`` (subcommands: analyse/analyze, synth)."""
+    ap = argparse.ArgumentParser(prog="semkit", description="SEM micro-crack statistics.")
+    ap.add_argument("--version", action="version", version=f"semkit {_version()}")
+    sub = ap.add_subparsers(dest="command", metavar="COMMAND")
+    _add_analyse(sub)
+    _add_synth(sub)
+    return ap
+
+
+def _load_config(path):
+    import yaml
+    try:
+        with open(path) as f:
+            cfg = yaml.safe_load(f) or {}
+    except (OSError, yaml.YAMLError) as e:
+        raise InputError(f"{path}: cannot read YAML config ({e})") from None
+    if not isinstance(cfg, dict):
+        raise InputError(f"{path}: expected a mapping of options")
+    cfg = {str(k).replace("-", "_"): v for k, v in cfg.items()}
+    bad = sorted(set(cfg) - set(_ANALYSE_KEYS))
+    if bad:
+        raise InputError(f"{path}: unknown option(s) {', '.join(bad)}; expected some of "
+                         f"{', '.join(_ANALYSE_KEYS)}")
+    return cfg
+
+
+def _run_analyse(args):
+    from .pipeline import analyse_folder
+    kw = _load_config(args.config) if args.config else {}
+    for k in _ANALYSE_KEYS:
+        v = getattr(args, k, None)
+        if v is not None:
+            kw[k] = v
+    if kw.get("max_hole_px") == 0:
+        kw["max_hole_px"] = None
+    if kw.get("jobs") is not None and kw["jobs"] < 1:
+        raise InputError(f"--jobs: expected >= 1, got {kw['jobs']}")
+    images, _ = analyse_folder(args.folder, args.out, **kw)
+    failed = images["error"].fillna("").astype(str).str.len() > 0
+    n_fail = int(failed.sum())
+    if n_fail:
+        first = images.loc[failed].iloc[0]
+        print(f"semkit: {n_fail} of {len(images)} images failed (first: {first['image']}: "
+              f"{first['error']}); see {args.out}/images.csv", file=sys.stderr)
+        return 1
+    return 0
+
+
+def _run_synth(args):
+    from .synth import write_sample_set
+    t = write_sample_set(args.out, seed=args.seed)
+    print(f"wrote {len(t)} images with manifest.csv and truth.csv to {args.out}")
+    return 0
+
+
+def main(argv=None) -> int:
+    """Entry point of the ``semkit`` console script; returns the exit status."""
+    ap = build_parser()
+    args = ap.parse_args(argv)
+    if not getattr(args, "run", None):
+        ap.print_help(sys.stderr)
+        return 2
+    try:
+        return args.run(args)
+    except InputError as e:
+        print(f"semkit: error: {e}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("semkit: interrupted; finished results were kept", file=sys.stderr)
+        return 130

@@ -1,0 +1,69 @@
+"""Numeric constants and tolerances of :mod:`semkit`, in one place.
+
+Tests read the same values (house rule 12), so a tolerance is changed here or nowhere.
+"""
+
+# --- pixel size -------------------------------------------------------------------------------
+#: SEM magnification -> pixel size in µm (thesis, 1024-px-wide frames).
+MAGNIFICATION_TABLE_UM = {100: 2.78, 200: 1.43, 500: 0.56}
+#: pixel size used when nothing else is known; recorded as source "default".
+DEFAULT_PIXEL_SIZE_UM = 1.0
+#: image file suffixes that :func:`semkit.io.read_image` accepts.
+IMAGE_SUFFIXES = (".tif", ".tiff", ".png", ".jpg", ".jpeg", ".bmp")
+
+# --- illumination -----------------------------------------------------------------------------
+#: the illumination field is fitted on the image shrunk so that its long side has this many px.
+FLATTEN_FIT_SIZE_PX = 128
+#: degree of the 2-D polynomial fitted to log(grey) for the illumination field.
+FLATTEN_POLY_DEGREE = 2
+#: Gaussian background: sigma as a fraction of the image's short side.
+FLATTEN_GAUSS_FRACTION = 0.15
+
+# --- threshold ------------------------------------------------------------------------------
+#: a mineral phase must hold at least this share of the pixels to count as a grey-level peak.
+MINERAL_MIN_FRACTION = 0.04
+#: the dark-tail seed lies this many noise sigmas below the darkest mineral peak.
+DARK_TAIL_SIGMAS = 5.0
+#: `auto`: a pixel is crack when it is this far (fraction) from the local background toward the
+#: crack core grey level. 0.5 is the partial-volume midpoint, which makes area unbiased.
+AUTO_AREA_FRACTION = 0.5
+#: `auto`: a weaker level used to *detect* thin cracks (their core never reaches the midpoint once
+#: blurred); objects are found at this level, area is counted at AUTO_AREA_FRACTION.
+AUTO_DETECT_FRACTION = 0.3
+#: sigma (px) of the normalised convolution that estimates the local background around cracks.
+LOCAL_BACKGROUND_SIGMA_PX = 3.0
+#: Gaussian pre-smoothing (px) of the grey image before thresholding (denoise, not despeckle).
+DENOISE_SIGMA_PX = 0.7
+#: a threshold that puts more than this share of the image in the dark class is suspect.
+MAX_DARK_FRACTION = 0.25
+#: `local`: block size (px, odd) and offset (fraction of the local mean).
+LOCAL_BLOCK_PX = 51
+LOCAL_OFFSET_FRACTION = 0.25
+
+# --- cleanup ----------------------------------------------------------------------------------
+#: an object whose bounding box fits in this many px on both sides and whose area is below
+#: SPECK_MAX_AREA_PX is an isolated speck (dust, noise), not a crack.
+SPECK_MAX_SIDE_PX = 5
+SPECK_MAX_AREA_PX = 16
+#: holes enclosed by a crack are filled up to this area (px); larger ones (a grain ringed by
+#: cracks) are left open. ImageJ fills all (``max_hole_px=None``).
+FILL_HOLES_MAX_PX = 100
+
+# --- length -------------------------------------------------------------------------------
+#: Kulpa (1977) weights for an 8-connected chain: unbiased length for random orientations.
+KULPA_STRAIGHT = 0.948
+KULPA_DIAGONAL = 1.343
+#: spurs (junction-to-end skeleton branches) shorter than this many local half-widths, plus
+#: SPUR_EXTRA_PX, are edge noise and are pruned.
+SPUR_HALF_WIDTHS = 2.0
+SPUR_EXTRA_PX = 2.0
+#: a crack whose mean width (area / length) is below this many px is flagged `thin`.
+THIN_WIDTH_PX = 1.6
+
+# --- accuracy targets (issue #2; tests assert these) -----------------------------------------
+AREA_TOL_MEDIAN = 0.03
+AREA_TOL_MAX = 0.08
+LENGTH_TOL_MEDIAN = 0.03
+LENGTH_TOL_MAX = 0.08
+THIN_LENGTH_TOL = 0.15
+SPURIOUS_AREA_MAX = 0.01

@@ -1,0 +1,158 @@
+"""Stage 5: label crack objects and measure them (one row per crack).
+
+Area is the pixel count x pixel area; length comes from the skeleton with Kulpa weights
+(:mod:`semkit.skeleton`); the mean aperture is area / length. Round, compact dark objects
+(pores) are told apart from cracks by shape and reported separately.
+"""
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+from . import config
+from .skeleton import skeleton_length, skeleton_nodes
+
+__all__ = ["label_cracks", "object_moments", "is_pore", "crack_table", "CRACK_COLUMNS"]
+
+#: cracks.csv columns (DESIGN.md §4) in order; more follow.
+CRACK_COLUMNS = ["image", "crack_id", "area_um2", "length_um", "mean_aperture_um",
+                 "orientation_deg", "tortuosity", "n_branches", "type_pre", "type_post",
+                 "confidence"]
+
+
+def label_cracks(mask):
+    """Label 8-connected crack objects.
+
+    Returns
+    -------
+    labels : (M, N) ndarray of int32
+        0 = background, 1..n objects (in raster order of their first pixel).
+    n : int
+        Number of objects.
+
+    Examples
+    --------
+    >>> m = np.zeros((4, 6), bool); m[0, 0] = m[1, 1] = m[3, 5] = True
+    >>> label_cracks(m)[1]
+    2
+    """
+    import cv2
+    n, lab = cv2.connectedComponents(np.ascontiguousarray(mask, np.uint8), connectivity=8)
+    return lab.astype(np.int32, copy=False), int(n - 1)
+
+
+def object_moments(labels, n):
+    """Per-object pixel count, centroid and second central moments.
+
+    Returns
+    -------
+    area, cx, cy, mxx, myy, mxy : (n + 1,) ndarray of float64 (entry 0 = background)
+    """
+    lab = labels.ravel()
+    idx = np.flatnonzero(lab)
+    l = lab[idx]
+    y, x = np.divmod(idx, labels.shape[1])
+    x = x.astype(np.float64)
+    y = y.astype(np.float64)
+    area = np.bincount(l, minlength=n + 1).astype(np.float64)
+    a = np.maximum(area, 1)
+    cx = np.bincount(l, x, n + 1) / a
+    cy = np.bincount(l, y, n + 1) / a
+    dx = x - cx[l]
+    dy = y - cy[l]
+    mxx = np.bincount(l, dx * dx, n + 1) / a + 1 / 12
+    myy = np.bincount(l, dy * dy, n + 1) / a + 1 / 12
+    mxy = np.bincount(l, dx * dy, n + 1) / a
+    return area, cx, cy, mxx, myy, mxy
+
+
+def is_pore(area, mxx, myy, mxy, *, max_aspect=2.0, min_fill=0.75, min_area_px=30):
+    """Pore test: compact (aspect < ``max_aspect``), full (area / equivalent ellipse >
+    ``min_fill``) and not tiny. Cracks are elongated or, when branched, far from full."""
+    tr = mxx + myy
+    det = np.sqrt(np.maximum((mxx - myy) ** 2 / 4 + mxy ** 2, 0))
+    l1 = tr / 2 + det
+    l2 = np.maximum(tr / 2 - det, 1e-9)
+    aspect = np.sqrt(l1 / l2)
+    fill = area / (4 * np.pi * np.sqrt(l1 * l2))
+    return (aspect < max_aspect) & (fill > min_fill) & (area >= min_area_px)
+
+
+def crack_table(labels, n, *, pixel_size_um, skeleton=None, area_mask=None, image_name=""):
+    """Measure each labelled object (stage 5-6) -> one row per object.
+
+    Parameters
+    ----------
+    labels : (M, N) ndarray of int32
+        Object labels from :func:`label_cracks`.
+    n : int
+    pixel_size_um : float
+    skeleton : (M, N) bool, optional
+        Thin skeleton of the objects; without it lengths are NaN (``--no-length``).
+    area_mask : (M, N) bool, optional
+        Pixels counted for area (default: all labelled pixels).
+    image_name : str
+
+    Returns
+    -------
+    table : DataFrame
+        :data:`CRACK_COLUMNS` then ``area_px, length_px, x_px, y_px, is_pore, thin``.
+        ``thin`` flags cracks narrower than ``THIN_WIDTH_PX`` (their area is the least
+        reliable part; their length is still measured). ``type_pre``/``type_post`` are
+        ``unknown`` until classification.
+    """
+    area_all, cx, cy, mxx, myy, mxy = object_moments(labels, n)
+    if area_mask is not None:
+        area_px = np.bincount(labels[area_mask], minlength=n + 1).astype(np.float64)
+    else:
+        area_px = area_all
+    px = float(pixel_size_um)
+    ids = np.arange(1, n + 1)
+    orient = (np.degrees(0.5 * np.arctan2(-2 * mxy, mxx - myy)) % 180.0)
+    pore = is_pore(area_all, mxx, myy, mxy)
+    if skeleton is not None:
+        length_px = skeleton_length(skeleton, labels, n + 1)
+        # isolated skeleton pixels (tiny blobs) have no links: give them one pixel of length
+        single = np.bincount(labels[skeleton], minlength=n + 1) > 0
+        length_px = np.where(single & (length_px == 0), 1.0, length_px)
+        ends, junc = skeleton_nodes(skeleton)
+        n_end = np.bincount(labels[ends], minlength=n + 1)
+        jl, nj = label_cracks(junc)
+        # a junction cluster counts once, for the object it lies in
+        if nj:
+            first = np.zeros(nj + 1, np.int64)
+            first[jl[junc]] = labels[junc]
+            n_junc = np.bincount(first[1:], minlength=n + 1)
+        else:
+            n_junc = np.zeros(n + 1, np.int64)
+        n_br = np.maximum(n_end + n_junc - 1, 1)
+        # tortuosity: length over the object's extent along its principal axis
+        theta = 0.5 * np.arctan2(2 * mxy, mxx - myy)
+        lab = labels.ravel()
+        idx = np.flatnonzero(lab)
+        l = lab[idx]
+        y, x = np.divmod(idx, labels.shape[1])
+        proj = x * np.cos(theta[l]) + y * np.sin(theta[l])
+        pmin = np.full(n + 1, np.inf)
+        pmax = np.full(n + 1, -np.inf)
+        np.minimum.at(pmin, l, proj)
+        np.maximum.at(pmax, l, proj)
+        extent = np.maximum(pmax - pmin + 1.0, 1.0)
+        tort = np.maximum(length_px / extent, 1.0)
+    else:
+        length_px = np.full(n + 1, np.nan)
+        n_br = np.zeros(n + 1, np.int64)
+        tort = np.full(n + 1, np.nan)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        aperture_px = np.where(length_px > 0, area_px / length_px, np.nan)
+    thin = aperture_px < config.THIN_WIDTH_PX
+    df = pd.DataFrame({
+        "image": image_name, "crack_id": ids,
+        "area_um2": area_px[1:] * px * px, "length_um": length_px[1:] * px,
+        "mean_aperture_um": aperture_px[1:] * px, "orientation_deg": orient[1:],
+        "tortuosity": tort[1:], "n_branches": n_br[1:].astype(np.int64),
+        "type_pre": "unknown", "type_post": "unknown", "confidence": np.nan,
+        "area_px": area_px[1:], "length_px": length_px[1:], "x_px": cx[1:], "y_px": cy[1:],
+        "is_pore": pore[1:], "thin": thin[1:],
+    })
+    return df

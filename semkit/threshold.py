@@ -1,0 +1,272 @@
+"""Stage 3: threshold the grey image into dark crack pixels.
+
+Methods (``method`` strings accepted by :func:`crack_mask`):
+
+``manual:VALUE``
+    pixels darker than VALUE (on the grey scale of the image given, i.e. after flattening).
+``otsu``
+    global Otsu threshold (fine when cracks are a large share; it splits mineral phases when they
+    are a few % and minerals' grey levels are far apart — then ``auto`` is the method).
+``local``
+    adaptive: darker than ``(1 - offset)`` x the local Gaussian mean over a block.
+``auto``
+    dark-class analysis (:func:`dark_class_levels`): the darkest mineral peak of the histogram
+    and its noise width, the crack core grey level below it; then a pixel-wise partial-volume
+    midpoint between the *local* background (normalised convolution over non-crack pixels) and
+    the crack core. Thin cracks are detected at a weaker level and kept by hysteresis only if
+    they hold a pixel past the midpoint (see :data:`semkit.config.AUTO_DETECT_FRACTION`).
+"""
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from . import config
+from .errors import InputError
+
+__all__ = ["ThresholdResult", "DarkLevels", "dark_class_levels", "threshold_otsu",
+           "threshold_local", "threshold_auto", "crack_mask", "parse_method"]
+
+
+@dataclasses.dataclass
+class DarkLevels:
+    """Grey levels found by :func:`dark_class_levels` (image units)."""
+
+    mineral: float      #: the darkest mineral peak
+    sigma: float        #: its noise width (std)
+    crack: float        #: crack core level (NaN when no dark class)
+    seed: float         #: the dark-tail level, ``mineral - DARK_TAIL_SIGMAS * sigma``
+    n_dark: int         #: pixels below ``seed``
+
+
+@dataclasses.dataclass
+class ThresholdResult:
+    """Output of :func:`crack_mask`.
+
+    Attributes
+    ----------
+    mask : (M, N) bool
+        Crack pixels counted for area.
+    detect_mask : (M, N) bool
+        Crack pixels used to find objects and skeletons (``mask`` or a superset of it).
+    method : str
+    value : float
+        The global threshold (for ``auto`` the grey level midway between the darkest mineral
+        and the crack core; the decision itself is local). NaN for ``local``.
+    dark_fraction : float
+        Share of the image in ``mask``.
+    ok : bool
+        False when the dark class looks like a mineral phase rather than cracks.
+    note : str
+        Why ``ok`` is False, else empty.
+    """
+
+    mask: np.ndarray
+    detect_mask: np.ndarray
+    method: str
+    value: float
+    dark_fraction: float
+    ok: bool = True
+    note: str = ""
+
+
+def parse_method(method: str):
+    """Split a method string: ``"manual:80"`` -> ``("manual", 80.0)``; checks the name."""
+    m = str(method).strip().lower()
+    if m.startswith("manual"):
+        try:
+            return "manual", float(m.split(":", 1)[1])
+        except (IndexError, ValueError):
+            raise InputError(f"threshold: expected 'manual:VALUE' with a number, got {method!r}") \
+                from None
+    if m in ("auto", "otsu", "local"):
+        return m, None
+    raise InputError(f"threshold: expected auto, otsu, local or manual:VALUE, got {method!r}")
+
+
+def _hist(img, lo, hi, bins=256):
+    h, edges = np.histogram(img, bins=bins, range=(lo, hi))
+    return h.astype(np.float64), 0.5 * (edges[1:] + edges[:-1])
+
+
+def threshold_otsu(image) -> float:
+    """Global Otsu threshold of a grey image (cracks are the pixels below it).
+
+    Examples
+    --------
+    >>> img = np.r_[np.full(50, 20.0), np.full(50, 200.0)]
+    >>> 20 < threshold_otsu(img) < 200
+    True
+    """
+    a = np.asarray(image, np.float64).ravel()
+    lo, hi = float(a.min()), float(a.max())
+    if hi <= lo:
+        return lo
+    h, c = _hist(a, lo, hi)
+    w0 = np.cumsum(h)
+    w1 = w0[-1] - w0
+    m0 = np.cumsum(h * c)
+    mt = m0[-1]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        between = (mt * w0 / w0[-1] - m0) ** 2 / (w0 * w1)
+    between[~np.isfinite(between)] = -1
+    return float(c[int(np.argmax(between))] + 0.5 * (c[1] - c[0]))
+
+
+def threshold_local(image, *, block_size=config.LOCAL_BLOCK_PX,
+                    offset=config.LOCAL_OFFSET_FRACTION):
+    """Adaptive threshold image: ``(1 - offset) * local Gaussian mean`` over ``block_size``.
+
+    Returns
+    -------
+    threshold : (M, N) ndarray of float32
+    """
+    import cv2
+    if block_size < 3:
+        raise ValueError(f"block_size: expected >= 3 px, got {block_size}")
+    img = np.asarray(image, np.float32)
+    mean = cv2.GaussianBlur(img, (0, 0), block_size / 6.0, borderType=cv2.BORDER_REFLECT)
+    return (1.0 - offset) * mean
+
+
+def dark_class_levels(image) -> DarkLevels:
+    """Find the darkest mineral grey level, its noise width and the crack core level.
+
+    The histogram (256 bins between the 0.01 and 99.99 percentiles) is smoothed; its peaks
+    holding at least ``MINERAL_MIN_FRACTION`` of the pixels are mineral phases; the darkest is
+    the reference. Its sigma comes from the half-maximum on its dark side (HWHM / 1.1774).
+    Pixels below ``mineral - DARK_TAIL_SIGMAS * sigma`` form the dark class; the crack core
+    level is the mode of that tail's histogram (cracks, pores: the epoxy/void grey).
+    """
+    from scipy.ndimage import gaussian_filter1d
+    from scipy.signal import find_peaks
+    a = np.asarray(image, np.float32)
+    sub = a[::2, ::2].ravel() if a.size > 400_000 else a.ravel()
+    lo, hi = np.percentile(sub, [0.01, 99.99])
+    if hi <= lo:
+        return DarkLevels(float(lo), 1.0, float("nan"), float(lo), 0)
+    h, c = _hist(sub, lo, hi)
+    hs = gaussian_filter1d(h, 2.0)
+    peaks, _ = find_peaks(hs, prominence=0.01 * hs.max())
+    if peaks.size == 0:
+        peaks = np.array([int(np.argmax(hs))])
+    # mass of each peak: between the minima separating it from its neighbours
+    bounds = [0] + [int(peaks[i] + np.argmin(hs[peaks[i]:peaks[i + 1] + 1]))
+                    for i in range(len(peaks) - 1)] + [len(hs)]
+    mass = np.array([hs[bounds[i]:bounds[i + 1]].sum() for i in range(len(peaks))]) / hs.sum()
+    major = peaks[mass >= config.MINERAL_MIN_FRACTION]
+    p = int(major[0]) if major.size else int(peaks[np.argmax(mass)])
+    half = hs[p] / 2
+    left = p
+    while left > 0 and hs[left] > half:
+        left -= 1
+    sigma = max((c[p] - c[left]) / 1.1774, (c[1] - c[0]))
+    mineral = float(c[p])
+    seed = mineral - config.DARK_TAIL_SIGMAS * sigma
+    tail = sub[sub < seed]
+    n_dark = int(tail.size * a.size / max(sub.size, 1))
+    crack = float("nan")
+    if tail.size >= 20:
+        th, tc = _hist(tail, float(tail.min()), float(seed), bins=64)
+        ths = gaussian_filter1d(th, 1.5)
+        crack = float(tc[int(np.argmax(ths))])
+    return DarkLevels(mineral, float(sigma), crack, float(seed), n_dark)
+
+
+def _local_background(img, exclude, sigma):
+    import cv2
+    wgt = (~exclude).astype(np.float32)
+    num = cv2.GaussianBlur(img * wgt, (0, 0), sigma, borderType=cv2.BORDER_REFLECT)
+    den = cv2.GaussianBlur(wgt, (0, 0), sigma, borderType=cv2.BORDER_REFLECT)
+    bg = num / np.maximum(den, 1e-6)
+    weak = den < 0.02
+    if weak.any():  # wide dark areas: widen the support
+        num2 = cv2.GaussianBlur(img * wgt, (0, 0), 4 * sigma, borderType=cv2.BORDER_REFLECT)
+        den2 = cv2.GaussianBlur(wgt, (0, 0), 4 * sigma, borderType=cv2.BORDER_REFLECT)
+        bg2 = num2 / np.maximum(den2, 1e-6)
+        bg[weak] = bg2[weak]
+    return bg
+
+
+def threshold_auto(image, *, area_fraction=config.AUTO_AREA_FRACTION,
+                   detect_fraction=config.AUTO_DETECT_FRACTION) -> ThresholdResult:
+    """The ``auto`` crack threshold on a flattened, denoised grey image (see module doc).
+
+    Returns
+    -------
+    result : ThresholdResult
+    """
+    import cv2
+    img = np.asarray(image, np.float32)
+    lv = dark_class_levels(img)
+    if not np.isfinite(lv.crack) or lv.n_dark < 10:
+        m = np.zeros(img.shape, bool)
+        return ThresholdResult(m, m, "auto", lv.seed, 0.0, True, "no dark class")
+    # exclude everything that might be crack (incl. its blurred rim) from the background
+    cand = (img < lv.mineral - 3.0 * lv.sigma).astype(np.uint8)
+    cand = cv2.dilate(cand, np.ones((5, 5), np.uint8)).astype(bool)
+    bg = _local_background(img, cand, config.LOCAL_BACKGROUND_SIGMA_PX)
+    bg = np.maximum(bg, lv.mineral)  # never below the darkest mineral: a crack cannot be a bg
+    contrast = bg - lv.crack
+    area = img < bg - area_fraction * contrast
+    detect = img < bg - detect_fraction * contrast
+    # hysteresis: keep weak components that hold a pixel past the area level
+    n, lab = cv2.connectedComponents(detect.view(np.uint8), connectivity=8)
+    keep = np.zeros(n, bool)
+    keep[np.unique(lab[area])] = True
+    keep[0] = False
+    detect = keep[lab]
+    area &= detect
+    frac = float(area.mean())
+    value = 0.5 * (lv.mineral + lv.crack)
+    ok, note = _check_dark_class(img, area, frac, lv)
+    return ThresholdResult(area, detect, "auto", value, frac, ok, note)
+
+
+def _check_dark_class(img, mask, frac, lv):
+    if frac > config.MAX_DARK_FRACTION:
+        return False, f"dark class holds {frac:.0%} of the image: a mineral phase, not cracks?"
+    if mask.any():
+        inside = float(np.median(img[mask]))
+        if inside > lv.mineral - 2.0 * lv.sigma:
+            return False, "dark class is not darker than the darkest mineral"
+    return True, ""
+
+
+def crack_mask(image, *, method="auto", block_size=config.LOCAL_BLOCK_PX,
+               offset=config.LOCAL_OFFSET_FRACTION) -> ThresholdResult:
+    """Threshold a (flattened, denoised) grey image into crack pixels (stage 3).
+
+    Parameters
+    ----------
+    image : (M, N) ndarray
+        Grey image, cracks dark.
+    method : str
+        ``auto``, ``otsu``, ``local`` or ``manual:VALUE``; see the module docstring.
+    block_size, offset
+        For ``local``; see :func:`threshold_local`.
+
+    Returns
+    -------
+    result : ThresholdResult
+        ``result.ok`` is False (with a ``note``) when the dark class looks like a mineral
+        phase: more than ``MAX_DARK_FRACTION`` of the image, or not darker than the darkest
+        mineral peak.
+    """
+    name, val = parse_method(method)
+    img = np.asarray(image, np.float32)
+    if name == "auto":
+        return threshold_auto(img)
+    if name == "manual":
+        t = val
+        m = img < t
+    elif name == "otsu":
+        t = threshold_otsu(img)
+        m = img < t
+    else:
+        t = float("nan")
+        m = img < threshold_local(img, block_size=block_size, offset=offset)
+    frac = float(m.mean())
+    ok, note = _check_dark_class(img, m, frac, dark_class_levels(img))
+    return ThresholdResult(m, m, name, float(t), frac, ok, note)
