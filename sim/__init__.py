@@ -1,8 +1,15 @@
 """sim: a compact 2D bonded-particle DEM (PFC2D style) in numba.
 
-Importing this package compiles nothing.
+Public API: :class:`Specimen` (specimen.npz v1), :class:`Simulation` (state, contact lists,
+compiled step loop, walls, servo, checkpoints), :class:`CrackLog`, the errors, and
+:mod:`sim.config` (tolerances and defaults). Importing this package compiles nothing: kernels
+compile lazily on first use and are cached on disk.
 """
+from . import config
+from .cracks import CrackLog
 from .errors import InputError, InstabilityError
+from .simulation import Simulation
 from .specimen import SCHEMA_VERSION, Specimen
 
-__all__ = ["Specimen", "SCHEMA_VERSION", "InputError", "InstabilityError"]
+__all__ = ["Specimen", "Simulation", "CrackLog", "SCHEMA_VERSION", "InputError",
+           "InstabilityError", "config"]

@@ -1,0 +1,65 @@
+"""Tolerances, defaults and numeric constants of the DEM engine, in one place.
+
+Tests read the same values (STYLE.md §5, rule 12). SI units throughout.
+"""
+
+#: Out-of-plane thickness of every disk, m (PFC2D convention, DESIGN.md §3).
+THICKNESS = 1.0
+
+#: Local damping coefficient alpha (Potyondy & Cundall 2004; thesis ``damp 0.7``).
+DAMPING = 0.7
+
+#: Default safety factor on the critical time step (REFERENCE.md §5).
+#: 0.5 leaves room for the rotational coupling of parallel bonds and for contacts that form
+#: between neighbour-list rebuilds; the 60:1 stiffness-contrast stress test and the energy-drift
+#: test both run at this value.
+TIMESTEP_FACTOR = 0.5
+
+#: Verlet skin as a fraction of the mean particle radius. Pairs closer than r_i + r_j + skin are
+#: kept in the contact list; the list is rebuilt when the largest displacement since the last
+#: build exceeds skin / 2.
+SKIN_FACTOR = 0.3
+
+#: Spare capacity when (re)allocating the contact arrays (fixed capacity + overflow flag).
+CAPACITY_GROWTH = 1.3
+
+#: Instability bounds.
+#: A particle moving more than this fraction of its radius in one step is an energy blow-up.
+MAX_STEP_DISPLACEMENT = 0.25
+#: An overlap larger than this fraction of the smaller radius is an instability.
+MAX_OVERLAP = 1.0
+
+#: Servo: fraction of the stress error corrected per step (PFC's alpha = 0.5) and the
+#: largest servo speed, m/s.
+SERVO_ALPHA = 0.5
+SERVO_VMAX = 1.0
+
+#: Equilibrium: default target of the mean unbalanced-force ratio and the check interval, steps.
+SOLVE_RATIO = 1e-5
+SOLVE_CHECK_INTERVAL = 50
+
+#: Bond states (per bond, int8).
+BOND_INTACT = 0
+BOND_BROKEN_TENSION = 1
+BOND_BROKEN_SHEAR = 2
+
+#: Bond kinds as in specimen.npz.
+KIND_PB = 0
+KIND_SJ = 1
+
+#: Step-loop status codes returned by the kernel.
+STATUS_DONE = 0
+STATUS_REBUILD = 1
+STATUS_UNSTABLE = 2
+
+#: Instability cause codes (kernel) and names (InstabilityError.cause).
+CAUSE_NAMES = {1: "nan", 2: "energy", 3: "overlap"}
+
+#: Validation tolerances used by the analytic tests (tests/sim) and ``gbmsim verify``.
+TOL_COLLISION_DURATION = 0.01
+TOL_RESTITUTION = 0.02
+TOL_PEAK_OVERLAP = 0.01
+TOL_LATTICE_MODULUS = 0.02
+TOL_BOND_STRENGTH = 1e-3
+TOL_DAMPING_DECAY = 0.01
+TOL_ENERGY_DRIFT = 1e-4
