@@ -20,6 +20,10 @@ TIMESTEP_FACTOR = 0.5
 #: build exceeds skin / 2.
 SKIN_FACTOR = 0.3
 
+#: Scenes with fewer particles run the step loop on one thread (a parallel region costs a few
+#: microseconds to start, more when other processes load the cores).
+PARALLEL_MIN_PARTICLES = 4000
+
 #: Spare capacity when (re)allocating the contact arrays (fixed capacity + overflow flag).
 CAPACITY_GROWTH = 1.3
 

@@ -1,9 +1,9 @@
 """Central-difference integration, the compiled step loop and the critical time step.
 
 One ``njit(parallel=True)`` function, :func:`run_steps`, runs many steps without returning to
-Python (STYLE.md §7): per step a bond pass, a joint pass, a contact pass (each writing per-pair
-forces, race-free), a serial wall pass, then one particle pass that gathers the pair forces,
-applies local damping and integrates. Passes a scene does not have (joints, walls, dashpots) are
+Python (STYLE.md §7): per step one particle pass that gathers the pair forces, applies local
+damping and integrates, then a bond pass, a joint pass, a contact pass (each writing per-pair
+forces, race-free) and a serial wall pass. Passes a scene does not have (joints, walls, dashpots) are
 skipped once per step; no per-contact branch tests for them. It returns early when the Verlet
 list needs a rebuild or the run became unstable.
 """
@@ -17,7 +17,7 @@ from .state import (ARI, BFX, BFY, BRK_NX, BRK_NY, BRK_STEP, BRK_X, BRK_Y, C_CN,
                     C_FS, C_FX, C_FY, C_KN, C_KS, C_MU, COHA, FM, FN, FRIC, FS, FVX, FVY, FW, FX,
                     FY, INVI, INVM, KNA, KNI, KSA, MB, NJX, NJY, Q_FN, Q_FS, Q_KN, Q_KS, Q_MU, R,
                     TANDIL, TANFA, TENA, UN, VX, VY, W, W_DISP, WFM, WFX, WFY, X, X0, Y, Y0)
-from .walls import wall_pass
+from .walls import wall_forces, wall_motion
 
 
 @njit
@@ -102,8 +102,13 @@ def particle_range(lo, hi, dt, alpha, step_lim, has_walls, x, y, vx, vy, w, fx, 
 @njit(parallel=True)
 def run_steps(nsteps, step0, dt, alpha, nchunks, skin, step_lim, overlap_lim, t, servo_alpha,
               pf, fix, bi, bj, bstate, bf, bmom, bptr, bref, npb, ci, cj, cf, cmom, cptr, cref,
-              nc, use_dash, wf, qp, qw, qf, nq, info):
-    """Run up to ``nsteps`` steps in place.
+              nc, use_dash, wf, qp, qw, qf, nq, refresh, info):
+    """Run up to ``nsteps`` steps in place (PFC cycle order).
+
+    Each step: (1) particle pass: gather the pair forces F^n, local damping with v^{n-1/2},
+    v^{n+1/2} and x^{n+1}; (2) wall motion (servo from the wall forces F^n); (3) force passes
+    at x^{n+1} with increments Δδ = V^{n+1/2} Δt: parallel bonds, smooth joints, contacts,
+    walls. After a call the stored forces belong to the current positions.
 
     Parameters
     ----------
@@ -124,6 +129,9 @@ def run_steps(nsteps, step0, dt, alpha, nchunks, skin, step_lim, overlap_lim, t,
         The :class:`sim.state.State` tables (written in place).
     use_dash : bool
         Contacts carry viscous dashpots (cf rows C_CN, C_CS).
+    refresh : bool
+        First re-evaluate the contact and wall forces at the current positions with zero
+        increments (after a list rebuild or at the start).
     info : (8,) float64, written
         [bond breaks, cause code, worst index, damping work (added), worst overlap ratio,
         max displacement, unused, unused].
@@ -143,6 +151,7 @@ def run_steps(nsteps, step0, dt, alpha, nchunks, skin, step_lim, overlap_lim, t,
     r = pf[R]
     n = x.size
     nb = bi.size
+    nsj = nb - npb
     nw = wf.shape[0]
     has_walls = nw > 0
     half = 0.5 * skin
@@ -151,31 +160,61 @@ def run_steps(nsteps, step0, dt, alpha, nchunks, skin, step_lim, overlap_lim, t,
     wres = np.zeros(nchunks)
     ores = np.zeros(nchunks)
     kres = np.zeros(nchunks, np.int64)
-    for s in range(nsteps):
+    maxd2 = 0.0
+    s = -1 if refresh else 0
+    while s < nsteps:
+        moving = s >= 0
         step = step0 + s + 1
-        # 1. parallel bonds
-        if npb > 0:
+        dti = dt if moving else 0.0
+        if moving:
+            # 1. particles: gather, damp, integrate
             for c in prange(nchunks):
-                lo = (npb * c) // nchunks
-                hi = (npb * (c + 1)) // nchunks
-                bres[c] = pb_range(lo, hi, step, dt, x, y, vx, vy, w, r, bi, bj, bstate, bf[FN],
-                                   bf[FS], bf[MB], bf[KNA], bf[KSA], bf[KNI], bf[ARI], bf[TENA],
-                                   bf[COHA], bf[TANFA], bf[BFX], bf[BFY], bmom, bf[BRK_X],
-                                   bf[BRK_Y], bf[BRK_NX], bf[BRK_NY], bf[BRK_STEP])
-            info[0] += bres.sum()
-        # 2. smooth joints
-        nsj = nb - npb
-        if nsj > 0:
-            for c in prange(nchunks):
-                lo = npb + (nsj * c) // nchunks
-                hi = npb + (nsj * (c + 1)) // nchunks
-                bres[c] = sj_range(lo, hi, step, dt, x, y, vx, vy, w, r, bi, bj, bstate, bf[FN],
-                                   bf[FS], bf[UN], bf[KNA], bf[KSA], bf[TENA], bf[COHA],
-                                   bf[TANFA], bf[FRIC], bf[TANDIL], bf[NJX], bf[NJY], bf[BFX],
-                                   bf[BFY], bmom, bf[BRK_X], bf[BRK_Y], bf[BRK_NX],
-                                   bf[BRK_NY], bf[BRK_STEP])
-            info[0] += bres.sum()
-        # 3. unbonded (and bonded-linear) contacts
+                lo = (n * c) // nchunks
+                hi = (n * (c + 1)) // nchunks
+                dres[c], kres[c], wres[c] = particle_range(
+                    lo, hi, dt, alpha, step_lim, has_walls, x, y, vx, vy, w, pf[FX], pf[FY],
+                    pf[FM], r, pf[INVM], pf[INVI], pf[X0], pf[Y0], pf[FVX], pf[FVY], pf[FW],
+                    pf[WFX], pf[WFY], pf[WFM], fix, bptr, bref, bf[BFX], bf[BFY], bmom, cptr,
+                    cref, cf[C_FX], cf[C_FY], cmom)
+            maxd2 = 0.0
+            bad = -1
+            for c in range(nchunks):
+                info[3] += wres[c]
+                if dres[c] > maxd2:
+                    maxd2 = dres[c]
+                if bad < 0 and kres[c] >= 0:
+                    bad = kres[c]
+            if bad >= 0:
+                info[1] = 1.0 if (vx[bad] != vx[bad] or vy[bad] != vy[bad] or w[bad] != w[bad]
+                                  or x[bad] != x[bad] or y[bad] != y[bad]) else 2.0
+                info[2] = bad
+                return s, 2
+            # 2. walls move
+            if has_walls:
+                wall_motion(dt, t, servo_alpha, wf)
+            # 3a. parallel bonds
+            if npb > 0:
+                for c in prange(nchunks):
+                    lo = (npb * c) // nchunks
+                    hi = (npb * (c + 1)) // nchunks
+                    bres[c] = pb_range(lo, hi, step, dt, x, y, vx, vy, w, r, bi, bj, bstate,
+                                       bf[FN], bf[FS], bf[MB], bf[KNA], bf[KSA], bf[KNI],
+                                       bf[ARI], bf[TENA], bf[COHA], bf[TANFA], bf[BFX],
+                                       bf[BFY], bmom, bf[BRK_X], bf[BRK_Y], bf[BRK_NX],
+                                       bf[BRK_NY], bf[BRK_STEP])
+                info[0] += bres.sum()
+            # 3b. smooth joints
+            if nsj > 0:
+                for c in prange(nchunks):
+                    lo = npb + (nsj * c) // nchunks
+                    hi = npb + (nsj * (c + 1)) // nchunks
+                    bres[c] = sj_range(lo, hi, step, dt, x, y, vx, vy, w, r, bi, bj, bstate,
+                                       bf[FN], bf[FS], bf[UN], bf[KNA], bf[KSA], bf[TENA],
+                                       bf[COHA], bf[TANFA], bf[FRIC], bf[TANDIL], bf[NJX],
+                                       bf[NJY], bf[BFX], bf[BFY], bmom, bf[BRK_X], bf[BRK_Y],
+                                       bf[BRK_NX], bf[BRK_NY], bf[BRK_STEP])
+                info[0] += bres.sum()
+        # 3c. contacts (bonded pairs included for their linear part)
         worst = 0.0
         kworst = -1
         if nc > 0:
@@ -184,68 +223,48 @@ def run_steps(nsteps, step0, dt, alpha, nchunks, skin, step_lim, overlap_lim, t,
                     lo = (nc * c) // nchunks
                     hi = (nc * (c + 1)) // nchunks
                     ores[c], kres[c] = contact_range_dashpot(
-                        lo, hi, dt, x, y, vx, vy, w, r, ci, cj, cf[C_FS], cf[C_KN], cf[C_KS],
+                        lo, hi, dti, x, y, vx, vy, w, r, ci, cj, cf[C_FS], cf[C_KN], cf[C_KS],
                         cf[C_MU], cf[C_CN], cf[C_CS], cf[C_FX], cf[C_FY], cf[C_FN], cmom)
             else:
                 for c in prange(nchunks):
                     lo = (nc * c) // nchunks
                     hi = (nc * (c + 1)) // nchunks
                     ores[c], kres[c] = contact_range(
-                        lo, hi, dt, x, y, vx, vy, w, r, ci, cj, cf[C_FS], cf[C_KN], cf[C_KS],
+                        lo, hi, dti, x, y, vx, vy, w, r, ci, cj, cf[C_FS], cf[C_KN], cf[C_KS],
                         cf[C_MU], cf[C_FX], cf[C_FY], cf[C_FN], cmom)
             for c in range(nchunks):
                 if ores[c] > worst:
                     worst = ores[c]
                     kworst = kres[c]
-        # 4. walls
+        # 3d. walls
         wworst = 0.0
         qworst = -1
         if has_walls:
-            wworst, qworst = wall_pass(dt, t, servo_alpha, x, y, vx, vy, w, r, pf[WFX], pf[WFY],
-                                       pf[WFM], wf, qp, qw, nq, qf[Q_FS], qf[Q_KN], qf[Q_KS],
-                                       qf[Q_MU], qf[Q_FN])
-        # 5. particles
-        for c in prange(nchunks):
-            lo = (n * c) // nchunks
-            hi = (n * (c + 1)) // nchunks
-            dres[c], kres[c], wres[c] = particle_range(
-                lo, hi, dt, alpha, step_lim, has_walls, x, y, vx, vy, w, pf[FX], pf[FY], pf[FM],
-                r, pf[INVM], pf[INVI], pf[X0], pf[Y0], pf[FVX], pf[FVY], pf[FW], pf[WFX],
-                pf[WFY], pf[WFM], fix, bptr, bref, bf[BFX], bf[BFY], bmom, cptr, cref, cf[C_FX],
-                cf[C_FY], cmom)
-        maxd2 = 0.0
-        bad = -1
-        for c in range(nchunks):
-            info[3] += wres[c]
-            if dres[c] > maxd2:
-                maxd2 = dres[c]
-            if bad < 0 and kres[c] >= 0:
-                bad = kres[c]
+            wworst, qworst = wall_forces(dti, x, y, vx, vy, w, r, pf[WFX], pf[WFY], pf[WFM], wf,
+                                         qp, qw, nq, qf[Q_FS], qf[Q_KN], qf[Q_KS], qf[Q_MU],
+                                         qf[Q_FN])
         info[4] = max(worst, wworst)
-        if bad >= 0:
-            info[1] = 1.0 if (vx[bad] != vx[bad] or vy[bad] != vy[bad] or w[bad] != w[bad]) \
-                else 2.0
-            info[2] = bad
-            return s, 2
         if worst > overlap_lim:
             info[1] = 3.0
             info[2] = kworst
-            return s, 2
+            return s + 1, 2
         if wworst > overlap_lim:
             info[1] = 4.0
             info[2] = qworst
-            return s, 2
-        maxd = np.sqrt(maxd2)
-        info[5] = maxd
-        if maxd > half:
-            return s + 1, 1
-        if has_walls:
-            wmax = 0.0
-            for k in range(nw):
-                if wf[k, W_DISP] > wmax:
-                    wmax = wf[k, W_DISP]
-            if maxd + wmax > skin:
+            return s + 1, 2
+        if moving:
+            maxd = np.sqrt(maxd2)
+            info[5] = maxd
+            if maxd > half:
                 return s + 1, 1
+            if has_walls:
+                wmax = 0.0
+                for k in range(nw):
+                    if wf[k, W_DISP] > wmax:
+                        wmax = wf[k, W_DISP]
+                if maxd + wmax > skin:
+                    return s + 1, 1
+        s += 1
     return nsteps, 0
 
 

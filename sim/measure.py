@@ -14,7 +14,7 @@ from .state import (C_FN, C_FS, C_FX, C_FY, C_KN, C_KS, FM, FN, FS, FX, FY, INER
 def energies(state, dt):
     """Kinetic and strain energies, J.
 
-    Kinetic energy uses the time-centred velocity v^n = v^{n+1/2} − ½ (F/m) Δt so that it pairs
+    Kinetic energy uses the time-centred velocity v^n = v^{n-1/2} + ½ (F^n/m) Δt so that it pairs
     with the strain energy of the forces at x^n (exact for undamped linear systems).
 
     Returns
@@ -23,9 +23,9 @@ def energies(state, dt):
         ``kinetic, strain_bond, strain_contact, strain_wall``.
     """
     pf = state.pf
-    vx = pf[VX] - 0.5 * pf[FX] * pf[INVM] * dt * ((state.fix & 1) == 0)
-    vy = pf[VY] - 0.5 * pf[FY] * pf[INVM] * dt * ((state.fix & 2) == 0)
-    w = pf[W] - 0.5 * pf[FM] * pf[INVI] * dt * ((state.fix & 4) == 0)
+    vx = pf[VX] + 0.5 * pf[FX] * pf[INVM] * dt * ((state.fix & 1) == 0)
+    vy = pf[VY] + 0.5 * pf[FY] * pf[INVM] * dt * ((state.fix & 2) == 0)
+    w = pf[W] + 0.5 * pf[FM] * pf[INVI] * dt * ((state.fix & 4) == 0)
     kin = 0.5 * float(np.sum(pf[MASS] * (vx * vx + vy * vy) + pf[INERTIA] * w * w))
     bf = state.bf
     intact = state.bstate == 0

@@ -240,6 +240,7 @@ class Simulation:
         st.wf[:, W_DISP] = 0.0
         pf[X0] = pf[X]
         pf[Y0] = pf[Y]
+        self._refresh = True  # contact/wall forces are re-evaluated before the next step
         self._update_timestep()
         if self.dashpot != (0.0, 0.0):
             m = pf[MASS]
@@ -303,9 +304,20 @@ class Simulation:
         return self
 
     def _run(self, n: int) -> None:
+        # small scenes run on one thread: waking a thread pool costs more than the work
+        nthreads = numba.get_num_threads()
+        if self.state.n < config.PARALLEL_MIN_PARTICLES and nthreads > 1:
+            numba.set_num_threads(1)
+            try:
+                self._run_chunks(n, 1)
+            finally:
+                numba.set_num_threads(nthreads)
+        else:
+            self._run_chunks(n, nthreads)
+
+    def _run_chunks(self, n: int, nch: int) -> None:
         st = self.state
         info = self._info
-        nch = numba.get_num_threads()
         left = n
         use_dash = self.dashpot != (0.0, 0.0)
         while left > 0:
@@ -316,7 +328,8 @@ class Simulation:
                 config.MAX_OVERLAP, config.THICKNESS, config.SERVO_ALPHA, st.pf, st.fix, st.bi,
                 st.bj, st.bstate, st.bf, st.bmom, st.bptr, st.bref, st.npb, st.ci, st.cj, st.cf,
                 st.cmom, st.cptr, st.cref, st.nc, use_dash, st.wf, st.qp, st.qw, st.qf, st.nq,
-                info)
+                self._refresh, info)
+            self._refresh = False
             self.step += int(done)
             self.time += int(done) * dt
             self.damping_work += float(info[3])
@@ -590,7 +603,8 @@ class Simulation:
                     damping=self.damping, timestep_factor=self.timestep_factor,
                     dashpot=list(self.dashpot), density_scale=self.density_scale,
                     skin=self.skin, pb_mcf=self.pb_mcf, sj_dilation_deg=self.sj_dilation_deg,
-                    damping_work=self.damping_work, kspread=getattr(self, "_kspread", None))
+                    damping_work=self.damping_work, kspread=getattr(self, "_kspread", None),
+                    refresh=bool(self._refresh))
         arrays = {"sim_meta": np.array(json.dumps(meta))}
         arrays.update({"state__" + k: v for k, v in self.state.to_dict().items()})
         arrays.update({"spec__" + k: v for k, v in self.specimen.to_arrays().items()})
@@ -639,6 +653,7 @@ class Simulation:
         self.time = float(meta["time"])
         self.dt = float(meta["dt"])
         self.damping_work = float(meta["damping_work"])
+        self._refresh = bool(meta["refresh"])
         if meta.get("kspread") is not None:
             self._kspread = meta["kspread"]
         self.state = State.from_dict({k[7:]: v for k, v in data.items()

@@ -10,19 +10,18 @@ import numpy as np
 
 from ._jit import njit
 from .contacts.linear import linear_force
-from .state import (W_DISP, W_FRIC, W_FX, W_FY, W_GAIN, W_KTOT, W_LENGTH, W_NX, W_NY, W_PX,
+from .state import (W_DISP, W_FX, W_FY, W_GAIN, W_KTOT, W_LENGTH, W_NX, W_NY, W_PX,
                     W_PY, W_SERVO, W_TARGET, W_VMAX, W_VX, W_VY)
 
 
 @njit
-def wall_pass(dt, t, servo_alpha, x, y, vx, vy, w, r, wfx, wfy, wfm, wf, qp, qw, nq, qfs, qkn,
-              qks, qmu, qfn):
-    """Wall contacts, wall forces, servo velocities and wall motion for one step (serial).
+def wall_forces(dt, x, y, vx, vy, w, r, wfx, wfy, wfm, wf, qp, qw, nq, qfs, qkn, qks, qmu, qfn):
+    """Wall contacts and wall forces for one step (serial; W and Q are small).
 
+    ``dt`` only scales the shear increment (0 re-evaluates the forces without motion).
     Writes the per-particle wall forces ``wfx, wfy, wfm`` of the particles in the wall-contact
     list, the shear history ``qfs`` and normal force ``qfn`` of each wall contact, and the wall
-    table columns W_FX, W_FY (force by the particles on the wall), W_KTOT, W_VX, W_VY, W_PX,
-    W_PY, W_DISP.
+    table columns W_FX, W_FY (force by the particles on the wall) and W_KTOT.
 
     Returns
     -------
@@ -72,6 +71,16 @@ def wall_pass(dt, t, servo_alpha, x, y, vx, vy, w, r, wfx, wfy, wfm, wf, qp, qw,
         if ov / r[p] > worst:
             worst = ov / r[p]
             qworst = q
+    return worst, qworst
+
+
+@njit
+def wall_motion(dt, t, servo_alpha, wf):
+    """Servo velocities (from the current wall forces) and wall displacement over one step.
+
+    Writes the wall table columns W_VX, W_VY (servo walls), W_PX, W_PY and W_DISP.
+    """
+    nw = wf.shape[0]
     for k in range(nw):
         nx = wf[k, W_NX]
         ny = wf[k, W_NY]
@@ -97,7 +106,6 @@ def wall_pass(dt, t, servo_alpha, x, y, vx, vy, w, r, wfx, wfy, wfm, wf, qp, qw,
         wf[k, W_PX] += ux
         wf[k, W_PY] += uy
         wf[k, W_DISP] += np.sqrt(ux * ux + uy * uy)
-    return worst, qworst
 
 
 def wall_candidates(x, y, r, wf, skin):
@@ -132,4 +140,4 @@ def servo_stress(wf, k, t):
     return -(wf[k, W_FX] * wf[k, W_NX] + wf[k, W_FY] * wf[k, W_NY]) / (wf[k, W_LENGTH] * t)
 
 
-__all__ = ["wall_pass", "wall_candidates", "carry_history", "servo_stress", "W_FRIC"]
+__all__ = ["wall_forces", "wall_motion", "wall_candidates", "carry_history", "servo_stress"]
