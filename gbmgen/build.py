@@ -21,7 +21,7 @@ from .fidelity import fidelity_report
 from .packing import pack_particles, pack_seeds
 from .params import Params, load_params
 from .table import GrainSizeTable
-from .tessellate import Grains, fit_power_weights, tessellate
+from .tessellate import Grains, fit_power_weights, polygon_areas, tessellate
 
 __all__ = ["build_grains", "build_specimen", "BuildResult", "TESSELLATIONS"]
 
@@ -114,8 +114,6 @@ def build_grains(table: GrainSizeTable | None = None, *, width_mm, height_mm, sc
             raise InputError(f"shape: expected one of {SHAPES}, got {shape!r}")
         xy, off, interior = controlled_tessellation(
             shape, box, slenderness=slenderness, grain_area_m2=grain_area_mm2 * 1e-6)
-        areas = np.abs(np.diff(off).astype(float))  # placeholder shape
-        from .tessellate import polygon_areas
         areas = polygon_areas(xy, off)
         if table is not None:
             mineral = _assign_minerals_by_area(areas, table.volume_fractions, rng)
@@ -186,6 +184,7 @@ def build_specimen(table: GrainSizeTable | None = None, *, width_mm, height_mm, 
     params : str or Params
         Preset name (``thesis-ch4``, ``thesis-ch5``), a YAML/JSON path, or a Params.
     seed : int, optional
+        Random seed; drawn from the OS and recorded in ``meta`` when not given.
 
     Returns
     -------
@@ -201,6 +200,9 @@ def build_specimen(table: GrainSizeTable | None = None, *, width_mm, height_mm, 
         Any bad input (named).
     """
     prm = params if isinstance(params, Params) else load_params(params)
+    if seed is None:
+        seed = int(np.random.SeedSequence().entropy % (2 ** 63))
+    seed = int(seed)
     box = _box(width_mm, height_mm)
     res = build_grains(table, width_mm=width_mm, height_mm=height_mm, scenario=scenario,
                        scale=scale, model_scale=model_scale, tessellation=tessellation,
@@ -211,8 +213,7 @@ def build_specimen(table: GrainSizeTable | None = None, *, width_mm, height_mm, 
     names = list(table.minerals) if table is not None else [next(iter(prm.minerals))]
     mineral_props = prm.mineral_arrays(names)
     # particles get their own stream (so grains do not change with particle settings)
-    prng = np.random.default_rng(np.random.SeedSequence(seed).spawn(1)[0]) if seed is not None \
-        else np.random.default_rng()
+    prng = np.random.default_rng(np.random.SeedSequence(seed).spawn(1)[0])
     t0 = time.perf_counter()
     r_mean = particle_radius_mm * 1e-3
     x, y, r, pinfo = pack_particles(box, radius_mean_m=r_mean, radius_ratio=radius_ratio,

@@ -1,0 +1,246 @@
+"""``gbmgen build | info | plot | export``: command-line interface (no maths here).
+
+Exit codes: 0 ok, 2 bad input (one line on stderr naming the file or field).
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+import time
+
+from . import __version__, config
+from .errors import InputError
+
+#: Shipped example tables, usable as ``--table NAME``.
+EXAMPLE_TABLES = {"table-4-1": "table_4_1.csv"}
+
+
+def _table_path(name):
+    if name in EXAMPLE_TABLES:
+        from importlib import resources
+        return str(resources.files("gbmgen").joinpath("presets", EXAMPLE_TABLES[name]))
+    return name
+
+
+def _parser():
+    p = argparse.ArgumentParser(prog="gbmgen", description="Grain-based model generator: "
+                                "grain-size table -> bonded grain-based specimen.npz")
+    p.add_argument("--version", action="version", version=f"gbmgen {__version__}")
+    sub = p.add_subparsers(dest="command", required=True)
+
+    b = sub.add_parser("build", help="build a specimen.npz from a grain-size table")
+    b.add_argument("--config", metavar="FILE.yaml",
+                   help="YAML mapping of option names (as below, - or _) to values")
+    b.add_argument("--table", help="grains.csv (DESIGN.md §4), or 'table-4-1' (thesis example)")
+    b.add_argument("--scenario", type=int, default=1, choices=(1, 2, 3, 4),
+                   help="size range: 1 full, 2 10-90%% passing, 3 mean±½mean, 4 mean±¼mean")
+    b.add_argument("--scale", type=float, default=1.0, help="grain-size factor (e.g. 1.5)")
+    b.add_argument("--model-scale", type=float, default=config.MODEL_SCALE,
+                   help="model size / table size (thesis: 10 x SEM scale) [%(default)s]")
+    b.add_argument("--width-mm", type=float, default=25.0)
+    b.add_argument("--height-mm", type=float, default=50.0)
+    b.add_argument("--tessellation", choices=("laguerre", "voronoi"), default="laguerre")
+    b.add_argument("--no-fit-areas", dest="fit_areas", action="store_false",
+                   help="Laguerre with weights r^2 only (no area fit)")
+    b.add_argument("--shape", choices=("hexagon", "rectangle", "shield"),
+                   help="controlled tessellation instead of seeds (thesis Ch. 5)")
+    b.add_argument("--slenderness", type=float, default=1.0, help="H/W of controlled grains")
+    b.add_argument("--grain-area-mm2", type=float, default=config.GRAIN_AREA_MM2)
+    b.add_argument("--particle-radius-mm", type=float, default=config.PARTICLE_RADIUS_MM,
+                   help="mean particle radius [%(default)s]")
+    b.add_argument("--radius-ratio", type=float, default=config.RADIUS_RATIO)
+    b.add_argument("--porosity", type=float, default=config.POROSITY)
+    b.add_argument("--bond-gap-mm", type=float, default=None,
+                   help=f"default {config.BOND_GAP_PER_RADIUS} x mean particle radius")
+    b.add_argument("--params", default=config.DEFAULT_PARAMS,
+                   help="thesis-ch4 | thesis-ch5 | FILE.yaml/json [%(default)s]")
+    b.add_argument("--seed", type=int, default=None,
+                   help="random seed (default: drawn and recorded in meta)")
+    b.add_argument("--out", required=True, help="specimen.npz to write")
+    b.add_argument("--geom", help="also write the PFC geometry file")
+    b.add_argument("--vtk", metavar="PREFIX", help="also write PREFIX_particles/_grains.vtk")
+    b.add_argument("--png", help="also write a PNG preview")
+    b.add_argument("--json", action="store_true", help="print the summary as JSON")
+    b.add_argument("--no-progress", action="store_true", help="print no stage lines")
+
+    i = sub.add_parser("info", help="summary of a specimen.npz (counts, fidelity)")
+    i.add_argument("specimen")
+    i.add_argument("--json", action="store_true", help="print counts and meta as JSON")
+
+    q = sub.add_parser("plot", help="PNG of a specimen (grains by mineral)")
+    q.add_argument("specimen")
+    q.add_argument("--out", help="PNG path [specimen with .png]")
+    q.add_argument("--particles", action="store_true")
+    q.add_argument("--joints", action="store_true", help="draw smooth-joint bonds")
+
+    e = sub.add_parser("export", help="PFC .geom and/or VTK of a specimen")
+    e.add_argument("specimen")
+    e.add_argument("--geom")
+    e.add_argument("--vtk", metavar="PREFIX")
+    return p
+
+
+def _apply_config(parser, argv):
+    pre = argparse.ArgumentParser(add_help=False)
+    pre.add_argument("--config")
+    known, _ = pre.parse_known_args(argv)
+    if not known.config:
+        return
+    import yaml
+    try:
+        with open(known.config, encoding="utf-8") as fh:
+            data = yaml.safe_load(fh) or {}
+    except OSError as exc:
+        raise InputError(f"{known.config}: cannot read ({exc})") from None
+    except yaml.YAMLError as exc:
+        raise InputError(f"{known.config}: not valid YAML ({exc})") from None
+    if not isinstance(data, dict):
+        raise InputError(f"{known.config}: expected a mapping of option names to values")
+    build = parser._subparsers._group_actions[0].choices["build"]
+    dests = {a.dest for a in build._actions}
+    clean = {}
+    for k, v in data.items():
+        d = str(k).replace("-", "_")
+        if d not in dests or d in ("config", "help"):
+            raise InputError(f"{known.config}: unknown option {k!r}")
+        clean[d] = v
+    build.set_defaults(**clean)
+    for a in build._actions:
+        if a.dest in clean:
+            a.required = False
+
+
+def _summary(spec):
+    m = spec.meta or {}
+    fid = m.get("fidelity", {})
+    kinds = spec.bond_kind
+    out = {"particles": spec.n_particles, "grains": spec.n_grains,
+           "parallel_bonds": int((kinds == 0).sum()), "smooth_joints": int((kinds == 1).sum()),
+           "minerals": [str(s) for s in spec.mineral_names],
+           "box_mm": [float(v) * 1e3 for v in spec.box],
+           "seed": m.get("seed"), "scenario": m.get("scenario"),
+           "tessellation": m.get("tessellation"),
+           "MHI_target": m.get("MHI_target"), "MHI_realised": m.get("MHI_realised"),
+           "H_target": m.get("H_target"), "H_realised": m.get("H_realised"),
+           "ks_max": fid.get("ks_max"),
+           "area_fraction_error_max": fid.get("area_fraction_error_max"),
+           "particles_per_grain": fid.get("particles_per_grain")}
+    return out
+
+
+def _print_summary(spec, out=sys.stdout):
+    s = _summary(spec)
+    fid = (spec.meta or {}).get("fidelity", {})
+    print(f"particles {s['particles']}  grains {s['grains']}  parallel bonds "
+          f"{s['parallel_bonds']}  smooth joints {s['smooth_joints']}", file=out)
+    print(f"box (mm) {s['box_mm']}  seed {s['seed']}  scenario {s['scenario']}  "
+          f"tessellation {s['tessellation']}", file=out)
+
+    def f(v, fmt=".3f"):
+        return "-" if v is None else format(v, fmt)
+
+    print(f"MHI target {f(s['MHI_target'])} realised {f(s['MHI_realised'])}   "
+          f"H target {f(s['H_target'])} realised {f(s['H_realised'])}", file=out)
+    minerals = fid.get("minerals")
+    if minerals:
+        print(f"{'mineral':<14}{'grains':>8}{'KS':>8}{'area %':>9}{'target %':>10}", file=out)
+        for name, v in minerals.items():
+            print(f"{name:<14}{v['n_grains']:>8}{v['ks']:>8.4f}{100 * v['area_fraction']:>9.2f}"
+                  f"{100 * v['area_fraction_target']:>10.2f}", file=out)
+    ppg = s.get("particles_per_grain")
+    if ppg:
+        print(f"particles per grain: min {ppg['min']} median {ppg['median']:g} "
+              f"(grains without particles {ppg['grains_without_particles']})", file=out)
+
+
+def _build(a):
+    from sim.specimen import Specimen  # noqa: F401  (fail early if sim is broken)
+
+    from .build import build_specimen
+    from .table import read_table
+
+    table = read_table(_table_path(a.table)) if a.table else None
+    if table is None and a.shape is None:
+        raise InputError("--table: a grain-size table is needed (or give --shape)")
+    t0 = time.perf_counter()
+    spec, timing = build_specimen(
+        table, width_mm=a.width_mm, height_mm=a.height_mm, scenario=a.scenario, scale=a.scale,
+        model_scale=a.model_scale, tessellation=a.tessellation, fit_areas=a.fit_areas,
+        shape=a.shape, slenderness=a.slenderness, grain_area_mm2=a.grain_area_mm2,
+        particle_radius_mm=a.particle_radius_mm, radius_ratio=a.radius_ratio,
+        porosity=a.porosity, bond_gap_mm=a.bond_gap_mm, params=a.params, seed=a.seed)
+    t1 = time.perf_counter()
+    spec.save(a.out)
+    timing["save"] = time.perf_counter() - t1
+    if a.geom:
+        from .export import export_geom
+        export_geom(spec, a.geom, name=os.path.basename(a.out))
+    if a.vtk:
+        from .export import export_vtk
+        export_vtk(spec, a.vtk)
+    if a.png:
+        from .plot import plot_specimen
+        plot_specimen(spec, a.png)
+    if a.json:
+        print(json.dumps({**_summary(spec), "out": a.out,
+                          "timing_s": {k: round(v, 3) for k, v in timing.items()},
+                          "total_s": round(time.perf_counter() - t0, 3)}))
+    else:
+        if not a.no_progress:
+            print("stages (s): " + ", ".join(f"{k} {v:.2f}" for k, v in timing.items()),
+                  file=sys.stderr)
+        _print_summary(spec)
+        print(f"wrote {a.out}")
+    return 0
+
+
+def _load(path):
+    from sim.specimen import Specimen
+    return Specimen.load(path)
+
+
+def main(argv=None) -> int:
+    """Entry point of the ``gbmgen`` console script."""
+    argv = sys.argv[1:] if argv is None else list(argv)
+    parser = _parser()
+    try:
+        if argv and argv[0] == "build":
+            _apply_config(parser, argv[1:])
+        a = parser.parse_args(argv)
+        if a.command == "build":
+            return _build(a)
+        spec = _load(a.specimen)
+        if a.command == "info":
+            if a.json:
+                print(json.dumps({**_summary(spec), "meta": spec.meta}, indent=1))
+            else:
+                _print_summary(spec)
+            return 0
+        if a.command == "plot":
+            from .plot import plot_specimen
+            out = a.out or os.path.splitext(a.specimen)[0] + ".png"
+            plot_specimen(spec, out, particles=a.particles, joints=a.joints)
+            print(f"wrote {out}")
+            return 0
+        if a.command == "export":
+            if not (a.geom or a.vtk):
+                raise InputError("export: give --geom PATH and/or --vtk PREFIX")
+            from .export import export_geom, export_vtk
+            if a.geom:
+                c = export_geom(spec, a.geom, name=os.path.basename(a.specimen))
+                print(f"wrote {a.geom} ({c['polys']} grains, {c['nodes']} nodes, "
+                      f"{c['edges']} edges)")
+            if a.vtk:
+                for p in export_vtk(spec, a.vtk):
+                    print(f"wrote {p}")
+            return 0
+    except InputError as exc:
+        print(f"gbmgen: error: {exc}", file=sys.stderr)
+        return 2
+    return 0
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())
