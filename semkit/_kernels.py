@@ -83,8 +83,63 @@ def polyline_excess(xs, ys, ws, ox, oy, out):
 
 
 @njit
-def chain_links(skel, labels, n_labels, n_straight, n_diag):
-    """Count 4- and 8-links of a thin 8-connected skeleton per object, in place.
+def thin_pixels(skel, rows, cols, lut1, lut2):
+    """Two-subiteration thinning (Lam, Lee & Suen 1992; scikit-image's ``thin``), in place.
+
+    Parameters
+    ----------
+    skel : (H, W) uint8
+        0/1 image, padded so that no foreground pixel touches the border. Thinned in place.
+    rows, cols : (K,) int64
+        Coordinates of the foreground pixels (only these are visited).
+    lut1, lut2 : (256,) bool
+        Deletion tables of the two subiterations, indexed by the 8-neighbour code
+        (bit 0 = east, then counter-clockwise: NE, N, NW, W, SW, S, SE).
+
+    Returns
+    -------
+    n_iter : int
+        Full iterations done.
+
+    Notes
+    -----
+    Each subiteration decides on all pixels first and deletes afterwards (parallel thinning).
+    Cost is K x iterations (about half the widest crack), independent of the image size.
+    """
+    k = rows.shape[0]
+    alive = np.ones(k, np.bool_)
+    dele = np.zeros(k, np.bool_)
+    n_iter = 0
+    changed = True
+    while changed:
+        changed = False
+        n_iter += 1
+        for sub in range(2):
+            for p in range(k):
+                dele[p] = False
+                if not alive[p]:
+                    continue
+                i = rows[p]
+                j = cols[p]
+                n = (skel[i, j + 1] | (skel[i - 1, j + 1] << 1) | (skel[i - 1, j] << 2)
+                     | (skel[i - 1, j - 1] << 3) | (skel[i, j - 1] << 4)
+                     | (skel[i + 1, j - 1] << 5) | (skel[i + 1, j] << 6)
+                     | (skel[i + 1, j + 1] << 7))
+                if sub == 0:
+                    dele[p] = lut1[n]
+                else:
+                    dele[p] = lut2[n]
+            for p in range(k):
+                if dele[p]:
+                    skel[rows[p], cols[p]] = 0
+                    alive[p] = False
+                    changed = True
+    return n_iter
+
+
+@njit
+def chain_links(skel, labels, n_labels, n_straight, n_diag, n_corner):
+    """Count chain links and corners of a thin 8-connected skeleton per object, in place.
 
     Parameters
     ----------
@@ -94,30 +149,204 @@ def chain_links(skel, labels, n_labels, n_straight, n_diag):
         Object label of each pixel (0 = background); read only where ``skel``.
     n_labels : int
         Number of labels + 1 (length of the output arrays).
-    n_straight, n_diag : (n_labels,) int64
-        Incremented in place: horizontal/vertical neighbour pairs, and diagonal pairs that are
-        not short-cut corners (a diagonal pair whose two common 4-neighbours are both empty).
+    n_straight, n_diag, n_corner : (n_labels,) int64
+        Incremented in place: horizontal/vertical neighbour pairs; diagonal pairs that are not
+        short-cut corners (a diagonal pair with a common 4-neighbour in the skeleton is
+        skipped); and corners (pixels with exactly two links that are not collinear).
 
     Notes
     -----
-    Dropping a diagonal link beside which a 4-neighbour path exists counts each staircase
-    corner once, so the chain is the 8-connected path a chain code would trace.
+    With these rules each staircase is the 8-connected path a chain code would trace, so
+    ``n_straight``, ``n_diag``, ``n_corner`` are the even, odd and corner counts of
+    Vossepoel & Smeulders (1982).
     """
     h, w = skel.shape
+    di = np.array([0, -1, -1, -1, 0, 1, 1, 1])
+    dj = np.array([1, 1, 0, -1, -1, -1, 0, 1])
     for i in range(h):
         for j in range(w):
             if not skel[i, j]:
                 continue
             lab = labels[i, j]
-            if j + 1 < w and skel[i, j + 1]:
-                n_straight[lab] += 1
-            if i + 1 < h:
-                if skel[i + 1, j]:
-                    n_straight[lab] += 1
-                if j + 1 < w and skel[i + 1, j + 1]:
-                    if not skel[i, j + 1] and not skel[i + 1, j]:
+            nl = 0
+            d0 = -1
+            d1 = -1
+            for d in range(8):
+                ii = i + di[d]
+                jj = j + dj[d]
+                if ii < 0 or ii >= h or jj < 0 or jj >= w or not skel[ii, jj]:
+                    continue
+                if d % 2 == 1:  # diagonal: skipped when a 4-neighbour path exists
+                    ia = i + di[d - 1]
+                    ja = j + dj[d - 1]
+                    ib = i + di[(d + 1) % 8]
+                    jb = j + dj[(d + 1) % 8]
+                    if skel[ia, ja] or skel[ib, jb]:
+                        continue
+                    if d == 7 or d == 5:  # count each diagonal pair once (from its upper pixel)
                         n_diag[lab] += 1
-                if j >= 1 and skel[i + 1, j - 1]:
-                    if not skel[i, j - 1] and not skel[i + 1, j]:
-                        n_diag[lab] += 1
-    return n_straight, n_diag
+                else:
+                    if d == 0 or d == 6:  # count each 4-pair once
+                        n_straight[lab] += 1
+                if nl == 0:
+                    d0 = d
+                elif nl == 1:
+                    d1 = d
+                nl += 1
+            if nl == 2 and (d1 - d0) != 4:
+                n_corner[lab] += 1
+
+
+@njit
+def _links(skel, i, j, nb_i, nb_j):
+    """Effective 8-links of pixel (i, j): 4-neighbours, plus diagonals with no 4-path beside
+    them. Writes up to 8 neighbours into nb_i, nb_j; returns their count. Assumes a 1-px
+    zero border."""
+    di = (0, -1, -1, -1, 0, 1, 1, 1)
+    dj = (1, 1, 0, -1, -1, -1, 0, 1)
+    n = 0
+    for d in range(8):
+        ii = i + di[d]
+        jj = j + dj[d]
+        if not skel[ii, jj]:
+            continue
+        if d % 2 == 1:
+            if skel[i + di[d - 1], j + dj[d - 1]] or skel[i + di[(d + 1) % 8], j + dj[(d + 1) % 8]]:
+                continue
+        nb_i[n] = ii
+        nb_j[n] = jj
+        n += 1
+    return n
+
+
+@njit
+def prune_spurs(skel, rows, cols, half_width, spur_half_widths, spur_extra_px):
+    """Remove spurs (end-to-junction skeleton branches shorter than the local half-width
+    rule) in place.
+
+    Parameters
+    ----------
+    skel : (H, W) uint8
+        0/1 thin skeleton with a 1-px zero border; pruned in place.
+    rows, cols : (K,) int64
+        Skeleton pixel coordinates.
+    half_width : (H, W) float32
+        Distance transform of the crack mask (local half-width at skeleton pixels), px.
+    spur_half_widths, spur_extra_px : float
+        A branch from an end point to a junction is a spur when its pixel count is at most
+        ``spur_half_widths * half_width[junction] + spur_extra_px``.
+
+    Returns
+    -------
+    n_removed : int
+        Skeleton pixels removed.
+    """
+    k = rows.shape[0]
+    nb_i = np.empty(8, np.int64)
+    nb_j = np.empty(8, np.int64)
+    path_i = np.empty(4096, np.int64)
+    path_j = np.empty(4096, np.int64)
+    removed = 0
+    for p in range(k):
+        i = rows[p]
+        j = cols[p]
+        if not skel[i, j]:
+            continue
+        if _links(skel, i, j, nb_i, nb_j) != 1:
+            continue
+        # walk from the end point until a junction, another end, or too far
+        pi, pj = -1, -1
+        ci, cj = i, j
+        n = 0
+        is_spur = False
+        while n < 4096:
+            path_i[n] = ci
+            path_j[n] = cj
+            n += 1
+            m = _links(skel, ci, cj, nb_i, nb_j)
+            if m >= 3:  # reached a junction: (ci, cj) is the junction itself
+                n -= 1
+                is_spur = n <= spur_half_widths * half_width[ci, cj] + spur_extra_px
+                break
+            if m == 1 and n > 1:
+                break  # an isolated branch (end to end): keep
+            nxt = -1
+            for q in range(m):
+                if nb_i[q] != pi or nb_j[q] != pj:
+                    nxt = q
+                    break
+            if nxt < 0:
+                break
+            pi, pj = ci, cj
+            ci, cj = nb_i[nxt], nb_j[nxt]
+            if n > 64:  # no spur is this long
+                break
+        if is_spur:
+            for q in range(n):
+                skel[path_i[q], path_j[q]] = 0
+            removed += n
+    return removed
+
+
+@njit
+def label_moments(labels, n_labels, out):
+    """Raw moments of each label, one pass over the image, in place.
+
+    Parameters
+    ----------
+    labels : (H, W) int32
+    n_labels : int
+        Highest label + 1.
+    out : (n_labels, 8) float64, zeroed by the caller
+        Columns: count, sum x, sum y, sum x², sum y², sum xy, then row min and row max
+        are not kept (columns 6-7 hold the bounding-box width and height after the call).
+    """
+    h, w = labels.shape
+    bb = np.empty((n_labels, 4), np.int64)  # xmin, xmax, ymin, ymax
+    for k in range(n_labels):
+        bb[k, 0] = w
+        bb[k, 1] = -1
+        bb[k, 2] = h
+        bb[k, 3] = -1
+    for i in range(h):
+        for j in range(w):
+            k = labels[i, j]
+            if k == 0:
+                continue
+            out[k, 0] += 1.0
+            out[k, 1] += j
+            out[k, 2] += i
+            out[k, 3] += j * j
+            out[k, 4] += i * i
+            out[k, 5] += i * j
+            if j < bb[k, 0]:
+                bb[k, 0] = j
+            if j > bb[k, 1]:
+                bb[k, 1] = j
+            if i < bb[k, 2]:
+                bb[k, 2] = i
+            if i > bb[k, 3]:
+                bb[k, 3] = i
+    for k in range(n_labels):
+        if bb[k, 1] >= 0:
+            out[k, 6] = bb[k, 1] - bb[k, 0] + 1
+            out[k, 7] = bb[k, 3] - bb[k, 2] + 1
+
+
+@njit
+def label_extent(labels, n_labels, cos_t, sin_t, pmin, pmax):
+    """Min and max of ``x cos_t + y sin_t`` over each label's pixels, in place.
+
+    ``pmin``/``pmax`` (n_labels,) float64 are preset to +inf/-inf by the caller.
+    """
+    h, w = labels.shape
+    for i in range(h):
+        for j in range(w):
+            k = labels[i, j]
+            if k == 0:
+                continue
+            p = j * cos_t[k] + i * sin_t[k]
+            if p < pmin[k]:
+                pmin[k] = p
+            if p > pmax[k]:
+                pmax[k] = p

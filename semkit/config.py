@@ -13,7 +13,7 @@ IMAGE_SUFFIXES = (".tif", ".tiff", ".png", ".jpg", ".jpeg", ".bmp")
 
 # --- illumination -----------------------------------------------------------------------------
 #: the illumination field is fitted on the image shrunk so that its long side has this many px.
-FLATTEN_FIT_SIZE_PX = 128
+FLATTEN_FIT_SIZE_PX = 96
 #: degree of the 2-D polynomial fitted to log(grey) for the illumination field.
 FLATTEN_POLY_DEGREE = 2
 #: Gaussian background: sigma as a fraction of the image's short side.
@@ -21,17 +21,25 @@ FLATTEN_GAUSS_FRACTION = 0.15
 
 # --- threshold ------------------------------------------------------------------------------
 #: a mineral phase must hold at least this share of the pixels to count as a grey-level peak.
-MINERAL_MIN_FRACTION = 0.04
+MINERAL_MIN_FRACTION = 0.02
 #: the dark-tail seed lies this many noise sigmas below the darkest mineral peak.
 DARK_TAIL_SIGMAS = 5.0
+DARK_TAIL_NOISE_SIGMAS = 8.0
 #: `auto`: a pixel is crack when it is this far (fraction) from the local background toward the
 #: crack core grey level. 0.5 is the partial-volume midpoint, which makes area unbiased.
 AUTO_AREA_FRACTION = 0.5
-#: `auto`: a weaker level used to *detect* thin cracks (their core never reaches the midpoint once
-#: blurred); objects are found at this level, area is counted at AUTO_AREA_FRACTION.
+#: `auto`: thin cracks never reach the midpoint once blurred, so objects are *detected* at a
+#: weaker level (fraction of the contrast, and at least AUTO_DETECT_SIGMAS noise sigmas deep)
+#: and kept when they hold a *seed* pixel (hysteresis); area is still counted at the midpoint.
 AUTO_DETECT_FRACTION = 0.3
-#: sigma (px) of the normalised convolution that estimates the local background around cracks.
-LOCAL_BACKGROUND_SIGMA_PX = 3.0
+AUTO_DETECT_SIGMAS = 4.0
+AUTO_SEED_FRACTION = 0.4
+AUTO_SEED_SIGMAS = 6.0
+#: when no crack is wide enough to show its core grey, the core is taken as this share of the
+#: darkest mineral's grey at most (BSE: epoxy/void is near black).
+THIN_ONLY_CRACK_RATIO = 0.3
+#: box size (px) of the normalised convolution that estimates the local background of cracks.
+LOCAL_BACKGROUND_BOX_PX = 9
 #: Gaussian pre-smoothing (px) of the grey image before thresholding (denoise, not despeckle).
 DENOISE_SIGMA_PX = 0.7
 #: a threshold that puts more than this share of the image in the dark class is suspect.
@@ -53,6 +61,10 @@ FILL_HOLES_MAX_PX = 100
 #: Kulpa (1977) weights for an 8-connected chain: unbiased length for random orientations.
 KULPA_STRAIGHT = 0.948
 KULPA_DIAGONAL = 1.343
+#: Vossepoel & Smeulders (1982) corner-count estimator: even, odd and corner weights.
+VS_STRAIGHT = 0.980
+VS_DIAGONAL = 1.406
+VS_CORNER = 0.091
 #: spurs (junction-to-end skeleton branches) shorter than this many local half-widths, plus
 #: SPUR_EXTRA_PX, are edge noise and are pruned.
 SPUR_HALF_WIDTHS = 2.0

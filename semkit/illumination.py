@@ -62,20 +62,20 @@ def illumination_field(image, *, method="polynomial", degree=config.FLATTEN_POLY
         a = np.column_stack(_poly_terms(u, v, degree))
         y = np.log(np.maximum(small.ravel().astype(np.float64), 1.0))
         keep = np.ones(y.size, bool)
-        for _ in range(3):
-            coef, *_ = np.linalg.lstsq(a[keep], y[keep], rcond=None)
+        for _ in range(3):  # normal equations: 6 unknowns, a few thousand rows
+            ak = a[keep]
+            coef = np.linalg.solve(ak.T @ ak + 1e-9 * np.eye(a.shape[1]), ak.T @ y[keep])
             r = y - a @ coef
             s = 1.4826 * np.median(np.abs(r[keep] - np.median(r[keep]))) + 1e-6
             keep = r > -2.5 * s
-        uf = (np.arange(w, dtype=np.float64) + 0.5) / w * 2 - 1
-        vf = (np.arange(h, dtype=np.float64) + 0.5) / h * 2 - 1
-        logf = np.zeros((h, w), np.float64)
-        k = 0
-        for i in range(degree + 1):
-            for j in range(degree + 1 - i):
-                logf += coef[k] * np.outer(vf ** j, uf ** i)
-                k += 1
-        field = np.exp(logf - logf.max())
+        # evaluate on a coarse grid (the field is smooth) and resize
+        gh, gw = max(h // 8, 2), max(w // 8, 2)
+        uf = ((np.arange(gw) + 0.5) / gw * 2 - 1)[None, :]
+        vf = ((np.arange(gh) + 0.5) / gh * 2 - 1)[:, None]
+        logf = sum(c * t for c, t in zip(coef, _poly_terms(uf, vf, degree)))
+        logf = np.broadcast_to(logf, (gh, gw)).astype(np.float32)
+        small_f = np.exp(logf - logf.max())
+        field = cv2.resize(small_f, (w, h), interpolation=cv2.INTER_LINEAR)
     elif method == "gaussian":
         ksz = max(3, int(round(min(sh, sw) * 0.03)) * 2 + 1)
         closed = cv2.morphologyEx(small, cv2.MORPH_CLOSE, np.ones((ksz, ksz), np.uint8))

@@ -12,7 +12,8 @@ import pandas as pd
 from . import config
 from .skeleton import skeleton_length, skeleton_nodes
 
-__all__ = ["label_cracks", "object_moments", "is_pore", "crack_table", "CRACK_COLUMNS"]
+__all__ = ["label_cracks", "object_moments", "is_pore", "crack_table", "partial_volume_area",
+           "CRACK_COLUMNS"]
 
 #: cracks.csv columns (DESIGN.md §4) in order; more follow.
 CRACK_COLUMNS = ["image", "crack_id", "area_um2", "length_um", "mean_aperture_um",
@@ -42,28 +43,24 @@ def label_cracks(mask):
 
 
 def object_moments(labels, n):
-    """Per-object pixel count, centroid and second central moments.
+    """Per-object pixel count, centroid, second central moments and bounding box.
 
     Returns
     -------
-    area, cx, cy, mxx, myy, mxy : (n + 1,) ndarray of float64 (entry 0 = background)
+    area, cx, cy, mxx, myy, mxy, bbox_w, bbox_h : (n + 1,) ndarray of float64
+        Entry 0 is the background. Moments are in px² and include the 1/12 of a pixel.
     """
-    lab = labels.ravel()
-    idx = np.flatnonzero(lab)
-    l = lab[idx]
-    y, x = np.divmod(idx, labels.shape[1])
-    x = x.astype(np.float64)
-    y = y.astype(np.float64)
-    area = np.bincount(l, minlength=n + 1).astype(np.float64)
+    from . import _kernels
+    m = np.zeros((n + 1, 8), np.float64)
+    _kernels.label_moments(np.ascontiguousarray(labels, np.int32), n + 1, m)
+    area = m[:, 0]
     a = np.maximum(area, 1)
-    cx = np.bincount(l, x, n + 1) / a
-    cy = np.bincount(l, y, n + 1) / a
-    dx = x - cx[l]
-    dy = y - cy[l]
-    mxx = np.bincount(l, dx * dx, n + 1) / a + 1 / 12
-    myy = np.bincount(l, dy * dy, n + 1) / a + 1 / 12
-    mxy = np.bincount(l, dx * dy, n + 1) / a
-    return area, cx, cy, mxx, myy, mxy
+    cx = m[:, 1] / a
+    cy = m[:, 2] / a
+    mxx = m[:, 3] / a - cx ** 2 + 1 / 12
+    myy = m[:, 4] / a - cy ** 2 + 1 / 12
+    mxy = m[:, 5] / a - cx * cy
+    return area, cx, cy, mxx, myy, mxy, m[:, 6], m[:, 7]
 
 
 def is_pore(area, mxx, myy, mxy, *, max_aspect=2.0, min_fill=0.75, min_area_px=30):
@@ -78,7 +75,8 @@ def is_pore(area, mxx, myy, mxy, *, max_aspect=2.0, min_fill=0.75, min_area_px=3
     return (aspect < max_aspect) & (fill > min_fill) & (area >= min_area_px)
 
 
-def crack_table(labels, n, *, pixel_size_um, skeleton=None, area_mask=None, image_name=""):
+def crack_table(labels, n, *, pixel_size_um, skeleton=None, area_mask=None, image_name="",
+                length_estimator="corner"):
     """Measure each labelled object (stage 5-6) -> one row per object.
 
     Parameters
@@ -101,9 +99,12 @@ def crack_table(labels, n, *, pixel_size_um, skeleton=None, area_mask=None, imag
         reliable part; their length is still measured). ``type_pre``/``type_post`` are
         ``unknown`` until classification.
     """
-    area_all, cx, cy, mxx, myy, mxy = object_moments(labels, n)
+    area_all, cx, cy, mxx, myy, mxy, _, _ = object_moments(labels, n)
     if area_mask is not None:
-        area_px = np.bincount(labels[area_mask], minlength=n + 1).astype(np.float64)
+        from . import _kernels
+        m = np.zeros((n + 1, 8), np.float64)
+        _kernels.label_moments(np.where(area_mask, labels, 0).astype(np.int32), n + 1, m)
+        area_px = m[:, 0]
     else:
         area_px = area_all
     px = float(pixel_size_um)
@@ -111,7 +112,7 @@ def crack_table(labels, n, *, pixel_size_um, skeleton=None, area_mask=None, imag
     orient = (np.degrees(0.5 * np.arctan2(-2 * mxy, mxx - myy)) % 180.0)
     pore = is_pore(area_all, mxx, myy, mxy)
     if skeleton is not None:
-        length_px = skeleton_length(skeleton, labels, n + 1)
+        length_px = skeleton_length(skeleton, labels, n + 1, estimator=length_estimator)
         # isolated skeleton pixels (tiny blobs) have no links: give them one pixel of length
         single = np.bincount(labels[skeleton], minlength=n + 1) > 0
         length_px = np.where(single & (length_px == 0), 1.0, length_px)
@@ -127,16 +128,12 @@ def crack_table(labels, n, *, pixel_size_um, skeleton=None, area_mask=None, imag
             n_junc = np.zeros(n + 1, np.int64)
         n_br = np.maximum(n_end + n_junc - 1, 1)
         # tortuosity: length over the object's extent along its principal axis
+        from . import _kernels
         theta = 0.5 * np.arctan2(2 * mxy, mxx - myy)
-        lab = labels.ravel()
-        idx = np.flatnonzero(lab)
-        l = lab[idx]
-        y, x = np.divmod(idx, labels.shape[1])
-        proj = x * np.cos(theta[l]) + y * np.sin(theta[l])
         pmin = np.full(n + 1, np.inf)
         pmax = np.full(n + 1, -np.inf)
-        np.minimum.at(pmin, l, proj)
-        np.maximum.at(pmax, l, proj)
+        _kernels.label_extent(np.ascontiguousarray(labels, np.int32), n + 1, np.cos(theta),
+                              np.sin(theta), pmin, pmax)
         extent = np.maximum(pmax - pmin + 1.0, 1.0)
         tort = np.maximum(length_px / extent, 1.0)
     else:
@@ -156,3 +153,36 @@ def crack_table(labels, n, *, pixel_size_um, skeleton=None, area_mask=None, imag
         "is_pore": pore[1:], "thin": thin[1:],
     })
     return df
+
+
+def partial_volume_area(image, labels, n, *, background, crack_level, rim_px=1):
+    """Area of each object as the sum of its pixels' crack coverage (partial volume), px.
+
+    For cracks about one pixel wide the blurred core never reaches the midpoint between
+    background and crack grey, so a pixel count misses them; the coverage
+    ``(bg - I) / (bg - crack)`` summed over the object and a ``rim_px`` rim is their area.
+
+    Parameters
+    ----------
+    image : (M, N) float
+        The grey image that was thresholded.
+    labels : (M, N) int32 ; n : int
+    background : (M, N) float
+        Local background grey (``ThresholdResult.background``).
+    crack_level : float
+        Crack core grey.
+
+    Returns
+    -------
+    area_px : (n + 1,) ndarray of float64
+    """
+    import cv2
+    from .threshold import coverage
+    lab = np.asarray(labels, np.float32)
+    if rim_px > 0:
+        k = np.ones((2 * rim_px + 1, 2 * rim_px + 1), np.uint8)
+        lab = np.where(lab > 0, lab, cv2.dilate(lab, k))
+    li = lab.astype(np.int64).ravel()
+    cov = coverage(image, background, crack_level).ravel()
+    sel = li > 0
+    return np.bincount(li[sel], cov[sel], minlength=n + 1)

@@ -13,30 +13,125 @@ import numpy as np
 
 from . import _kernels, config
 
-__all__ = ["skeletonize", "skeleton_length", "skeleton_nodes"]
+__all__ = ["skeletonize", "prune_spurs", "chain_counts", "skeleton_length", "skeleton_nodes"]
+
+
+def _thin_luts():
+    """Deletion tables of the two thinning subiterations (Lam, Lee & Suen 1992, conditions
+    G1, G2, G3 / G3'; the same tables as scikit-image's ``thin``)."""
+    bits = (np.arange(256)[:, None] >> np.arange(8)[None, :]) & 1
+    b = bits.astype(bool)
+    g1 = np.zeros(256, bool)
+    s = np.zeros(256, int)
+    for i in (0, 2, 4, 6):
+        s += (~b[:, i]) & (b[:, i + 1] | b[:, (i + 2) % 8])
+    g1 = s == 1
+    n1 = np.zeros(256, int)
+    n2 = np.zeros(256, int)
+    for k in (1, 3, 5, 7):
+        n1 += b[:, k] | b[:, k - 1]
+        n2 += b[:, k] | b[:, (k + 1) % 8]
+    mn = np.minimum(n1, n2)
+    g2 = (mn == 2) | (mn == 3)
+    g3 = ~((b[:, 1] | b[:, 2] | ~b[:, 7]) & b[:, 0])
+    g3p = ~((b[:, 5] | b[:, 6] | ~b[:, 3]) & b[:, 4])
+    return g1 & g2 & g3, g1 & g2 & g3p
+
+
+_LUTS = None
 
 
 def skeletonize(mask):
-    """One-pixel-thin, 8-connected skeleton of a binary mask (scikit-image's thinning).
+    """One-pixel-thin, 8-connected skeleton of a binary mask.
 
-    Only the bounding box of the foreground is processed.
+    Two-subiteration thinning (Lam, Lee & Suen 1992) run by a numba kernel over the foreground
+    pixels only, so its cost grows with the crack area, not the image size. Unlike the
+    Zhang-Suen default of ``skimage.morphology.skeletonize``, it does not erode 2-px-thick
+    45° bands from their ends (which loses up to the whole crack).
+
+    Parameters
+    ----------
+    mask : (M, N) bool
+
+    Returns
+    -------
+    skel : (M, N) bool
+
+    Examples
+    --------
+    >>> m = np.zeros((9, 20), bool); m[3:6, 2:18] = True
+    >>> int(skeletonize(m).sum())
+    14
     """
-    from skimage.morphology import skeletonize as _sk
+    global _LUTS
+    if _LUTS is None:
+        _LUTS = _thin_luts()
     m = np.asarray(mask, bool)
     out = np.zeros(m.shape, bool)
     rows = np.flatnonzero(m.any(axis=1))
     if rows.size == 0:
         return out
     cols = np.flatnonzero(m.any(axis=0))
-    r0, r1 = max(rows[0] - 1, 0), min(rows[-1] + 2, m.shape[0])
-    c0, c1 = max(cols[0] - 1, 0), min(cols[-1] + 2, m.shape[1])
-    out[r0:r1, c0:c1] = _sk(m[r0:r1, c0:c1])
+    r0, r1 = rows[0], rows[-1] + 1
+    c0, c1 = cols[0], cols[-1] + 1
+    sk = np.zeros((r1 - r0 + 2, c1 - c0 + 2), np.uint8)
+    sk[1:-1, 1:-1] = m[r0:r1, c0:c1]
+    rr, cc = np.nonzero(sk)
+    _kernels.thin_pixels(sk, rr.astype(np.int64), cc.astype(np.int64), _LUTS[0], _LUTS[1])
+    out[r0:r1, c0:c1] = sk[1:-1, 1:-1].astype(bool)
     return out
 
 
-def skeleton_length(skel, labels, n_labels, *, weights=(config.KULPA_STRAIGHT,
-                                                          config.KULPA_DIAGONAL)):
-    """Length of each object's skeleton in px, from Kulpa-weighted chain links.
+def prune_spurs(skel, mask, *, half_widths=config.SPUR_HALF_WIDTHS,
+                extra_px=config.SPUR_EXTRA_PX):
+    """Remove skeleton spurs caused by rough crack edges.
+
+    A spur is a branch from an end point to a junction no longer than ``half_widths`` x the
+    local half-width (distance transform of ``mask`` at the junction) + ``extra_px``. Real
+    branches are longer; end-to-end branches are never removed.
+
+    Parameters
+    ----------
+    skel : (M, N) bool
+    mask : (M, N) bool
+        The crack mask the skeleton came from.
+
+    Returns
+    -------
+    pruned : (M, N) bool
+    """
+    import cv2
+    s = np.asarray(skel, bool)
+    if not s.any():
+        return s.copy()
+    pad = np.zeros((s.shape[0] + 2, s.shape[1] + 2), np.uint8)
+    pad[1:-1, 1:-1] = s
+    m = np.zeros(pad.shape, np.uint8)
+    m[1:-1, 1:-1] = np.asarray(mask, bool)
+    dt = cv2.distanceTransform(m, cv2.DIST_L2, 5).astype(np.float32)
+    rr, cc = np.nonzero(pad)
+    _kernels.prune_spurs(pad, rr.astype(np.int64), cc.astype(np.int64), dt,
+                         float(half_widths), float(extra_px))
+    return pad[1:-1, 1:-1].astype(bool)
+
+
+def chain_counts(skel, labels, n_labels):
+    """Even (straight) links, odd (diagonal) links and corners of each object's skeleton.
+
+    Returns
+    -------
+    n_straight, n_diag, n_corner : (n_labels,) ndarray of int64
+    """
+    ns = np.zeros(n_labels, np.int64)
+    nd = np.zeros(n_labels, np.int64)
+    nc = np.zeros(n_labels, np.int64)
+    _kernels.chain_links(np.ascontiguousarray(skel, np.bool_),
+                         np.ascontiguousarray(labels, np.int32), n_labels, ns, nd, nc)
+    return ns, nd, nc
+
+
+def skeleton_length(skel, labels, n_labels, *, estimator="corner"):
+    """Length of each object's skeleton in px from its chain code.
 
     Parameters
     ----------
@@ -46,8 +141,12 @@ def skeleton_length(skel, labels, n_labels, *, weights=(config.KULPA_STRAIGHT,
         Object labels (0 = background).
     n_labels : int
         Highest label + 1.
-    weights : (float, float)
-        Weight of a straight and of a diagonal link; ``(1, sqrt(2))`` gives skan's length.
+    estimator : {"corner", "kulpa", "sqrt2", "count"}
+        ``corner``: Vossepoel & Smeulders (1982), 0.980 n_e + 1.406 n_o - 0.091 n_c (n_c
+        corners), unbiased and within ~2 % for every direction; ``kulpa``: 0.948 n_e + 1.343
+        n_o, unbiased on average over directions but up to -5 % on axis-parallel cracks;
+        ``sqrt2``: n_e + sqrt(2) n_o (skan's branch distance; ~ +5 %); ``count``: pixels
+        (the ImageJ habit; ~ -10 %).
 
     Returns
     -------
@@ -57,14 +156,25 @@ def skeleton_length(skel, labels, n_labels, *, weights=(config.KULPA_STRAIGHT,
     Examples
     --------
     >>> s = np.eye(11, dtype=bool)  # 10 diagonal steps
-    >>> float(skeleton_length(s, s.astype(np.int32), 2, weights=(1.0, 2 ** 0.5))[1].round(3))
+    >>> float(skeleton_length(s, s.astype(np.int32), 2, estimator="sqrt2")[1].round(3))
     14.142
     """
-    ns = np.zeros(n_labels, np.int64)
-    nd = np.zeros(n_labels, np.int64)
-    _kernels.chain_links(np.ascontiguousarray(skel, np.bool_),
-                         np.ascontiguousarray(labels, np.int32), n_labels, ns, nd)
-    return weights[0] * ns + weights[1] * nd
+    ns, nd, nc = chain_counts(skel, labels, n_labels)
+    if estimator == "corner":
+        a, b, c = config.VS_STRAIGHT, config.VS_DIAGONAL, config.VS_CORNER
+    elif estimator == "kulpa":
+        a, b, c = config.KULPA_STRAIGHT, config.KULPA_DIAGONAL, 0.0
+    elif estimator == "sqrt2":
+        a, b, c = 1.0, np.sqrt(2.0), 0.0
+    elif estimator == "count":
+        npx = np.bincount(labels[skel], minlength=n_labels).astype(np.float64)
+        npx[0] = 0
+        return npx
+    else:
+        raise ValueError(f"estimator: expected corner, kulpa, sqrt2 or count, got {estimator!r}")
+    out = a * ns + b * nd - c * nc
+    out[0] = 0.0
+    return out
 
 
 def skeleton_nodes(skel):

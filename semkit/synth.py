@@ -57,8 +57,9 @@ class SynthImage:
         Pixel size, µm.
     cracks : DataFrame
         One row per crack: ``crack_id, type_pre`` (inter|intra|trans), ``type_post``
-        (tensile|shear|mixed, or unknown for ``stage="pre"``), ``area_px, length_px, width_px``
-        (nominal mean width), ``n_traces, n_branches, debris_px, n_grains, orientation_deg``.
+        (tensile|shear|mixed, or unknown for ``stage="pre"``), ``area_px`` (pixel count of the
+        mask), ``area_cov_px`` (partial-volume area: sum of the anti-aliased coverage; for
+        1-px cracks the physically meaningful area), ``length_px, width_px`` (nominal width), ``n_traces, n_branches, debris_px, n_grains, orientation_deg``.
     grains : DataFrame
         One row per grain: ``grain_id, mineral`` (name), ``mineral_idx, area_px, eq_diameter_px``.
     mineral_names : tuple of str
@@ -466,16 +467,18 @@ def make_sem_image(shape=(768, 1024), *, stage="pre", n_cracks=None, widths=(1.0
         if debris:
             exd, _ = _render_traces(debris, (h, w))
             debris_px = int((exd <= 0).sum())
+        area_cov = float(np.clip(0.5 - ex, 0.0, 1.0).sum())
         length = sum(_polylen(t) for t in traces)
         chord = mains[0][-1, :2] - mains[0][0, :2]
         all_pts = np.vstack([_resample(m, 1.0) for m in mains])
         rows.append(dict(crack_id=cid, type_pre=type_pre, type_post=type_post,
-                         area_px=int(free.sum()), length_px=length, width_px=width,
+                         area_px=int(free.sum()), area_cov_px=area_cov, length_px=length, width_px=width,
                          n_traces=len(traces), n_branches=n_branches, debris_px=debris_px,
                          n_grains=len(_grains_on(all_pts, grain_labels)),
                          orientation_deg=float(np.degrees(np.arctan2(-chord[1], chord[0])) % 180.0)))
         all_traces.append(traces + debris)
-    cracks = pd.DataFrame(rows, columns=["crack_id", "type_pre", "type_post", "area_px", "length_px",
+    cracks = pd.DataFrame(rows, columns=["crack_id", "type_pre", "type_post", "area_px",
+                                         "area_cov_px", "length_px",
                                          "width_px", "n_traces", "n_branches", "debris_px",
                                          "n_grains", "orientation_deg"])
 

@@ -25,7 +25,8 @@ import numpy as np
 from . import config
 from .errors import InputError
 
-__all__ = ["ThresholdResult", "DarkLevels", "dark_class_levels", "threshold_otsu",
+__all__ = ["ThresholdResult", "DarkLevels", "dark_class_levels", "noise_sigma", "coverage",
+           "threshold_otsu",
            "threshold_local", "threshold_auto", "crack_mask", "parse_method"]
 
 
@@ -69,6 +70,8 @@ class ThresholdResult:
     dark_fraction: float
     ok: bool = True
     note: str = ""
+    background: np.ndarray | None = None   #: local background grey (``auto`` only)
+    crack_level: float = float("nan")      #: crack core grey (``auto`` only)
 
 
 def parse_method(method: str):
@@ -88,6 +91,16 @@ def parse_method(method: str):
 def _hist(img, lo, hi, bins=256):
     h, edges = np.histogram(img, bins=bins, range=(lo, hi))
     return h.astype(np.float64), 0.5 * (edges[1:] + edges[:-1])
+
+
+def _percentiles(a, q):
+    """Fast approximate percentiles from a 4096-bin histogram (no sort)."""
+    mn, mx = float(a.min()), float(a.max())
+    if mx <= mn:
+        return mn, mx
+    h, c = _hist(a.ravel(), mn, mx, bins=4096)
+    cdf = np.cumsum(h) / h.sum() * 100.0
+    return tuple(float(c[min(int(np.searchsorted(cdf, qq)), len(c) - 1)]) for qq in q)
 
 
 def threshold_otsu(image) -> float:
@@ -133,65 +146,111 @@ def threshold_local(image, *, block_size=config.LOCAL_BLOCK_PX,
 def dark_class_levels(image) -> DarkLevels:
     """Find the darkest mineral grey level, its noise width and the crack core level.
 
-    The histogram (256 bins between the 0.01 and 99.99 percentiles) is smoothed; its peaks
-    holding at least ``MINERAL_MIN_FRACTION`` of the pixels are mineral phases; the darkest is
-    the reference. Its sigma comes from the half-maximum on its dark side (HWHM / 1.1774).
-    Pixels below ``mineral - DARK_TAIL_SIGMAS * sigma`` form the dark class; the crack core
-    level is the mode of that tail's histogram (cracks, pores: the epoxy/void grey).
+    Mineral phases are found on a grey *closing* of the image (an 11 x 11 square removes
+    every dark feature narrower than ~10 px: cracks, specks, boundaries), so a crack class of
+    a few % can never pass for a mineral: the darkest peak of the closed image's histogram
+    holding at least ``MINERAL_MIN_FRACTION`` of the pixels is the darkest mineral. Its level
+    and noise sigma (half-maximum on the dark side / 1.1774) are then read on the histogram
+    of the image itself. Pixels below ``mineral - DARK_TAIL_SIGMAS * sigma`` form the dark
+    class; the crack core level is the mode of that tail (the epoxy/void grey).
     """
+    import cv2
     from scipy.ndimage import gaussian_filter1d
     from scipy.signal import find_peaks
     a = np.asarray(image, np.float32)
-    sub = a[::2, ::2].ravel() if a.size > 400_000 else a.ravel()
-    lo, hi = np.percentile(sub, [0.01, 99.99])
+    sub = a[::2, ::2] if a.size > 400_000 else a
+    lo, hi = _percentiles(sub, (0.01, 99.99))
     if hi <= lo:
-        return DarkLevels(float(lo), 1.0, float("nan"), float(lo), 0)
-    h, c = _hist(sub, lo, hi)
-    hs = gaussian_filter1d(h, 2.0)
-    peaks, _ = find_peaks(hs, prominence=0.01 * hs.max())
+        return DarkLevels(lo, 1.0, float("nan"), lo, 0)
+    closed = cv2.morphologyEx(np.ascontiguousarray(sub), cv2.MORPH_CLOSE,
+                              np.ones((11, 11) if sub is a else (7, 7), np.uint8))
+    hc, c = _hist(closed.ravel(), lo, hi)
+    hcs = gaussian_filter1d(hc, 2.0)
+    peaks, _ = find_peaks(np.r_[0.0, hcs, 0.0], prominence=0.01 * hcs.max())
+    peaks = peaks - 1
     if peaks.size == 0:
-        peaks = np.array([int(np.argmax(hs))])
-    # mass of each peak: between the minima separating it from its neighbours
-    bounds = [0] + [int(peaks[i] + np.argmin(hs[peaks[i]:peaks[i + 1] + 1]))
-                    for i in range(len(peaks) - 1)] + [len(hs)]
-    mass = np.array([hs[bounds[i]:bounds[i + 1]].sum() for i in range(len(peaks))]) / hs.sum()
-    major = peaks[mass >= config.MINERAL_MIN_FRACTION]
-    p = int(major[0]) if major.size else int(peaks[np.argmax(mass)])
+        peaks = np.array([int(np.argmax(hcs))])
+    bounds = [0] + [int(peaks[i] + np.argmin(hcs[peaks[i]:peaks[i + 1] + 1]))
+                    for i in range(len(peaks) - 1)] + [len(hcs)]
+    mass = np.array([hcs[bounds[i]:bounds[i + 1]].sum() for i in range(len(peaks))]) / hcs.sum()
+    major = np.flatnonzero(mass >= config.MINERAL_MIN_FRACTION)
+    q = int(major[0]) if major.size else int(np.argmax(mass))
+    # refine on the image's own histogram: the local maximum near the closed-image peak
+    # (closing shifts a noisy level up by ~1-2 sigma)
+    h, _ = _hist(sub.ravel(), lo, hi)
+    hs = gaussian_filter1d(h, 2.0)
+    p0 = int(peaks[q])
+    win = max(int(0.1 * len(hs)), 3)
+    lo_i = max(bounds[q] - win // 2, 0)
+    p = lo_i + int(np.argmax(hs[lo_i:p0 + 1]))
     half = hs[p] / 2
     left = p
     while left > 0 and hs[left] > half:
         left -= 1
     sigma = max((c[p] - c[left]) / 1.1774, (c[1] - c[0]))
     mineral = float(c[p])
-    seed = mineral - config.DARK_TAIL_SIGMAS * sigma
+    # the dark tail starts a few peak widths below the mineral, or (when the peak is wide
+    # because grains differ, not because of noise) DARK_TAIL_NOISE_SIGMAS pixel-noise sigmas
+    seed = mineral - min(config.DARK_TAIL_SIGMAS * sigma,
+                         max(3.0 * sigma, config.DARK_TAIL_NOISE_SIGMAS * noise_sigma(sub)))
     tail = sub[sub < seed]
     n_dark = int(tail.size * a.size / max(sub.size, 1))
     crack = float("nan")
     if tail.size >= 20:
-        th, tc = _hist(tail, float(tail.min()), float(seed), bins=64)
-        ths = gaussian_filter1d(th, 1.5)
-        crack = float(tc[int(np.argmax(ths))])
+        # interior pixels of cracks >= 3 px wide carry the core grey; thin cracks only
+        # partial volumes, so they are used only when there is no interior at all
+        dark = (sub < seed).view(np.uint8)
+        interior = cv2.erode(dark, np.ones((3, 3), np.uint8)).view(bool)
+        core = sub[interior]
+        if core.size >= 20:
+            crack = float(np.median(core))
+        else:  # all cracks thin: their darkest values are partial volumes; the core is
+            # assumed at least as dark as 30 % of the darkest mineral (epoxy / void in BSE)
+            th, tc = _hist(tail, float(tail.min()), float(seed), bins=64)
+            crack = min(float(tc[int(np.argmax(gaussian_filter1d(th, 1.5)))]),
+                        config.THIN_ONLY_CRACK_RATIO * mineral)
     return DarkLevels(mineral, float(sigma), crack, float(seed), n_dark)
 
 
-def _local_background(img, exclude, sigma):
+def _local_background(img, exclude, size):
+    """Mean of the non-excluded pixels in a ``size`` box (normalised convolution); where a box
+    holds too few of them (inside wide dark areas) a box 4x larger is used."""
     import cv2
     wgt = (~exclude).astype(np.float32)
-    num = cv2.GaussianBlur(img * wgt, (0, 0), sigma, borderType=cv2.BORDER_REFLECT)
-    den = cv2.GaussianBlur(wgt, (0, 0), sigma, borderType=cv2.BORDER_REFLECT)
+    iw = img * wgt
+    k = (int(size), int(size))
+    num = cv2.blur(iw, k, borderType=cv2.BORDER_REFLECT)
+    den = cv2.blur(wgt, k, borderType=cv2.BORDER_REFLECT)
     bg = num / np.maximum(den, 1e-6)
-    weak = den < 0.02
-    if weak.any():  # wide dark areas: widen the support
-        num2 = cv2.GaussianBlur(img * wgt, (0, 0), 4 * sigma, borderType=cv2.BORDER_REFLECT)
-        den2 = cv2.GaussianBlur(wgt, (0, 0), 4 * sigma, borderType=cv2.BORDER_REFLECT)
-        bg2 = num2 / np.maximum(den2, 1e-6)
-        bg[weak] = bg2[weak]
+    weak = den < 0.05
+    if weak.any():
+        k4 = (4 * int(size) + 1, 4 * int(size) + 1)
+        num2 = cv2.blur(iw, k4, borderType=cv2.BORDER_REFLECT)
+        den2 = cv2.blur(wgt, k4, borderType=cv2.BORDER_REFLECT)
+        bg[weak] = num2[weak] / np.maximum(den2[weak], 1e-6)
     return bg
 
 
+def noise_sigma(image) -> float:
+    """Robust pixel-noise sigma: MAD of the image minus its 3 x 3 mean (/0.943 for white
+    noise), on a subsample; smooth texture and grain contrast do not enter."""
+    import cv2
+    a = np.asarray(image, np.float32)
+    hp = a - cv2.blur(a, (3, 3), borderType=cv2.BORDER_REFLECT)
+    v = hp[1:-1:3, 1:-1:3].ravel()
+    return float(1.4826 * np.median(np.abs(v - np.median(v))) / 0.943) + 1e-6
+
+
 def threshold_auto(image, *, area_fraction=config.AUTO_AREA_FRACTION,
-                   detect_fraction=config.AUTO_DETECT_FRACTION) -> ThresholdResult:
+                   detect_fraction=config.AUTO_DETECT_FRACTION,
+                   seed_fraction=config.AUTO_SEED_FRACTION) -> ThresholdResult:
     """The ``auto`` crack threshold on a flattened, denoised grey image (see module doc).
+
+    Three levels below the local background ``bg``, as fractions of the local contrast
+    ``bg - crack`` (each at least a few noise sigmas deep): *area* (the partial-volume
+    midpoint, 0.5), *seed* and *detect*. Objects are the components of the detect mask
+    that hold a seed pixel (hysteresis); area counts the pixels past the midpoint, except for
+    thin objects, measured by partial volume (:func:`coverage`).
 
     Returns
     -------
@@ -203,25 +262,36 @@ def threshold_auto(image, *, area_fraction=config.AUTO_AREA_FRACTION,
     if not np.isfinite(lv.crack) or lv.n_dark < 10:
         m = np.zeros(img.shape, bool)
         return ThresholdResult(m, m, "auto", lv.seed, 0.0, True, "no dark class")
+    sn = noise_sigma(img)
     # exclude everything that might be crack (incl. its blurred rim) from the background
-    cand = (img < lv.mineral - 3.0 * lv.sigma).astype(np.uint8)
-    cand = cv2.dilate(cand, np.ones((5, 5), np.uint8)).astype(bool)
-    bg = _local_background(img, cand, config.LOCAL_BACKGROUND_SIGMA_PX)
+    cand = (img < lv.mineral - 3.0 * lv.sigma)
+    cand = cv2.dilate(cand.view(np.uint8), np.ones((5, 5), np.uint8)).view(bool)
+    bg = _local_background(img, cand, config.LOCAL_BACKGROUND_BOX_PX)
     bg = np.maximum(bg, lv.mineral)  # never below the darkest mineral: a crack cannot be a bg
-    contrast = bg - lv.crack
-    area = img < bg - area_fraction * contrast
-    detect = img < bg - detect_fraction * contrast
-    # hysteresis: keep weak components that hold a pixel past the area level
+    contrast = np.maximum(bg - lv.crack, 1e-3)
+    depth = bg - img
+    area = depth > area_fraction * contrast
+    seed = depth > np.maximum(seed_fraction * contrast, config.AUTO_SEED_SIGMAS * sn)
+    detect = depth > np.maximum(detect_fraction * contrast, config.AUTO_DETECT_SIGMAS * sn)
+    # hysteresis: keep weak components that hold a seed pixel
     n, lab = cv2.connectedComponents(detect.view(np.uint8), connectivity=8)
     keep = np.zeros(n, bool)
-    keep[np.unique(lab[area])] = True
+    keep[lab[seed]] = True
     keep[0] = False
     detect = keep[lab]
     area &= detect
     frac = float(area.mean())
     value = 0.5 * (lv.mineral + lv.crack)
     ok, note = _check_dark_class(img, area, frac, lv)
-    return ThresholdResult(area, detect, "auto", value, frac, ok, note)
+    return ThresholdResult(area, detect, "auto", value, frac, ok, note, background=bg,
+                           crack_level=lv.crack)
+
+
+def coverage(image, background, crack_level):
+    """Partial-volume crack coverage of each pixel, ``(bg - I) / (bg - crack)`` clipped to
+    [0, 1]; its sum over a thin crack and its rim is the crack's area in px."""
+    c = (background - np.asarray(image, np.float32)) / np.maximum(background - crack_level, 1e-3)
+    return np.clip(c, 0.0, 1.0)
 
 
 def _check_dark_class(img, mask, frac, lv):
