@@ -7,11 +7,13 @@ dynamic simulation: it minimises the harmonic overlap energy
     E = 1/2 sum_contacts delta_ij^2 + 1/2 sum_walls delta_iw^2,   delta = max(0, r_i + r_j - d_ij)
 
 by mass-weighted gradient steps with heavy-ball momentum, every step Jacobi style (all
-displacements from the same old positions), so the result does not depend on the thread count.
-Neighbours come from a uniform cell grid in which a disk is entered in every cell its bounding
-box touches, so that wide size distributions (grain seeds, size ratio ~25) stay cheap; a pair is
-handled once per disk in the cell holding the lower-left corner of the two bounding boxes'
-intersection.
+displacements from the same old positions, serial loops), so the result is deterministic.
+Candidate pairs come from a Verlet list with a skin, rebuilt when a disk has moved a quarter of
+the skin; the list is built on a uniform cell grid in which a disk is entered in every cell its
+bounding box touches, so that wide size distributions (grain seeds, size ratio ~25) stay cheap;
+a pair is kept once, in the cell holding the lower-left corner of the two bounding boxes'
+intersection. The kernels run serially: on the shared 2-core machine threaded ``prange``
+loops were 10-25x slower under load.
 
 The kernel ``_relax`` is pure on arrays and checks nothing; :func:`relax_overlaps` checks.
 """
