@@ -1,9 +1,172 @@
 """Subcommands of ``gbmsim`` for the test protocols (ucs, tension, brazilian, biaxial, calibrate).
 
-``sim.cli`` calls :func:`register` with its argparse subparsers object.
+``sim.cli`` calls :func:`register` with its argparse subparsers object; each subcommand sets
+``func(args) -> int`` (exit code: 0 ok, 1 finished but a target missed, 2 bad input,
+130 interrupted). No maths here: flags map 1:1 to the keywords of the protocol functions.
 """
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+
+__all__ = ["register", "run_test_command", "run_calibrate_command"]
+
+_TESTS = ("ucs", "tension", "brazilian", "biaxial")
+
+
+def _common(p, *, rate=True):
+    from .loading import DEFAULT_POST_PEAK, DEFAULT_STRAIN_RATE
+    p.add_argument("specimen", help="specimen.npz (DESIGN.md §4)")
+    p.add_argument("--out", required=True, help="results directory")
+    p.add_argument("--params", metavar="FILE.yaml",
+                   help="micro-parameter file applied to the specimen's minerals by name")
+    if rate:
+        p.add_argument("--strain-rate", type=float, default=DEFAULT_STRAIN_RATE,
+                       help=f"loading strain rate, 1/s (default {DEFAULT_STRAIN_RATE})")
+    p.add_argument("--post-peak", type=float, default=DEFAULT_POST_PEAK,
+                   help="stop when the stress falls below this fraction of the peak "
+                        f"(default {DEFAULT_POST_PEAK})")
+    p.add_argument("--max-strain", type=float, default=None,
+                   help="stop at this strain instead (elastic checks); disables --post-peak")
+    p.add_argument("--damping", type=float, default=0.7, help="local damping alpha (0.7)")
+    p.add_argument("--timestep-factor", type=float, default=None,
+                   help="safety factor on the critical time step (engine default)")
+    p.add_argument("--checkpoint-every", type=int, default=0,
+                   help="also write checkpoint.npz every N records (always on Ctrl-C)")
+    p.add_argument("--no-figures", action="store_true", help="skip the PNG figures")
+    p.add_argument("--no-progress", action="store_true", help="no tqdm progress bar")
 
 
 def register(subparsers):
-    """Add the protocol subcommands to ``subparsers`` (filled in by the lab-test work)."""
+    """Add ``ucs``, ``tension``, ``brazilian``, ``biaxial`` and ``calibrate`` to ``subparsers``."""
+    helps = {"ucs": "uniaxial compression between rigid frictionless platens",
+             "tension": "direct tension by pulled end groups",
+             "brazilian": "Brazilian disc (cut from the specimen), sigma_t = 2P/(pi D t)",
+             "biaxial": "biaxial compression with servo-held confinement"}
+    for name in _TESTS:
+        p = subparsers.add_parser(name, help=helps[name], description=helps[name])
+        _common(p)
+        p.set_defaults(func=run_test_command, test=name)
+        if name == "ucs":
+            p.add_argument("--e-method", choices=("tangent", "secant"), default="tangent",
+                           help="E at 50 %% of the peak: tangent (default) or secant")
+        if name == "tension":
+            p.add_argument("--grip-depth-mm", type=float, default=None,
+                           help="depth of each pulled end group, mm (default 10 %% of H)")
+        if name == "brazilian":
+            p.add_argument("--diameter-mm", type=float, default=None,
+                           help="disc diameter, mm (default: the smaller side of the box)")
+            p.add_argument("--no-cut", action="store_true",
+                           help="the specimen already is a disc")
+            p.add_argument("--loading", choices=("jaws", "platens"), default="jaws")
+        if name == "biaxial":
+            p.add_argument("--confinement-mpa", type=float, default=20.0,
+                           help="confining stress sigma3, MPa (default 20, the thesis)")
+    p = subparsers.add_parser("calibrate", help="fit micro-parameters to E, UCS, sigma_t",
+                              description="Automatic calibration (docs/labtests.md).")
+    p.add_argument("specimens", nargs="+",
+                   help="specimen.npz files: the first is used for the search, all for the "
+                        "seed average at the end")
+    p.add_argument("--out", required=True, help="output directory")
+    p.add_argument("--params", metavar="FILE.yaml",
+                   help="starting parameters (default: thesis Ch. 4 Tables 4-3/4-4)")
+    p.add_argument("--target-e-gpa", type=float, default=65.0)
+    p.add_argument("--target-ucs-mpa", type=float, default=135.0)
+    p.add_argument("--target-tensile-mpa", type=float, default=18.0)
+    p.add_argument("--tol", type=float, default=0.03, help="search tolerance (0.03)")
+    p.add_argument("--accept", type=float, default=0.05, help="acceptance of the seed mean")
+    p.add_argument("--max-evaluations", type=int, default=10)
+    p.add_argument("--strain-rate", type=float, default=None,
+                   help="loading strain rate, 1/s (default: the protocols' default)")
+    p.add_argument("--tension-test", choices=("direct", "brazilian"), default="direct")
+    p.add_argument("--no-progress", action="store_true")
+    p.set_defaults(func=run_calibrate_command)
     return subparsers
+
+
+def _load(args):
+    from ..specimen import Specimen
+    from .parameters import apply_parameters, load_parameters
+    spec = Specimen.load(args.specimen)
+    if args.params:
+        spec = apply_parameters(spec, load_parameters(args.params))
+    return spec
+
+
+def run_test_command(args) -> int:
+    """Run one laboratory test from parsed arguments; print a one-line summary."""
+    from ..errors import InputError
+    try:
+        spec = _load(args)
+    except InputError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    kw = dict(strain_rate=args.strain_rate, max_strain=args.max_strain,
+              post_peak=None if args.max_strain is not None else args.post_peak,
+              damping=args.damping, timestep_factor=args.timestep_factor, out=None,
+              progress=not args.no_progress, checkpoint_every=args.checkpoint_every,
+              figures=not args.no_figures)
+    if args.test == "ucs":
+        from .ucs import run_ucs as fn
+        kw["e_method"] = args.e_method
+    elif args.test == "tension":
+        from .tension import run_tension as fn
+        if args.grip_depth_mm is not None:
+            kw["grip_depth"] = args.grip_depth_mm * 1e-3
+    elif args.test == "brazilian":
+        from .brazilian import run_brazilian as fn
+        kw.update(cut=not args.no_cut, loading=args.loading,
+                  diameter=None if args.diameter_mm is None else args.diameter_mm * 1e-3)
+    else:
+        from .biaxial import run_biaxial as fn
+        kw["confinement"] = args.confinement_mpa * 1e6
+    os.makedirs(args.out, exist_ok=True)
+    try:
+        res = fn(spec, **{**kw, "out": args.out})
+    except KeyboardInterrupt:
+        print(f"interrupted: checkpoint and partial results in {args.out}", file=sys.stderr)
+        return 130
+    except (InputError, ValueError) as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    s = res.summary
+    keys = ("E_gpa", "nu", "ucs_mpa", "ci_mpa", "cd_mpa", "tensile_mpa", "steps", "wall_s")
+    print(json.dumps({k: s[k] for k in keys if k in s}))
+    return 0
+
+
+def run_calibrate_command(args) -> int:
+    """Calibrate from parsed arguments (see :mod:`sim.protocols.calibration`)."""
+    from ..errors import InputError
+    from .calibration import calibrate_specimens
+    targets = {"E": args.target_e_gpa * 1e9, "UCS": args.target_ucs_mpa * 1e6,
+               "sigma_t": args.target_tensile_mpa * 1e6}
+    try:
+        res = calibrate_specimens(args.specimens, out=args.out, params=args.params,
+                                  targets=targets, tol=args.tol, accept=args.accept,
+                                  max_evaluations=args.max_evaluations,
+                                  strain_rate=args.strain_rate, tension_test=args.tension_test,
+                                  progress=not args.no_progress)
+    except KeyboardInterrupt:
+        print(f"interrupted: evaluations so far in {args.out}", file=sys.stderr)
+        return 130
+    except (InputError, ValueError) as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    print(json.dumps({"converged": res.converged, "final_errors": res.final_errors,
+                      "n_evaluations": res.n_evaluations, "wall_s": round(res.wall_s, 1)}))
+    return 0 if res.converged else 1
+
+
+def main(argv=None) -> int:
+    """Stand-alone entry (``python -m sim.protocols.cli``) for when ``sim.cli`` is absent."""
+    parser = argparse.ArgumentParser(prog="gbmsim")
+    register(parser.add_subparsers(dest="command", required=True))
+    args = parser.parse_args(argv)
+    return args.func(args)
+
+
+if __name__ == "__main__":   # pragma: no cover
+    raise SystemExit(main())

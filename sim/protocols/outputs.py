@@ -1,4 +1,4 @@
-"""Result files of a laboratory test (DESIGN.md §4): summary.json, history.csv, cracks.csv, figures.
+"""Result files of a laboratory test (DESIGN.md §4): summary.json, history.csv, cracks.csv, PNGs.
 
 Every file is written atomically: to a temporary file in the same directory, then renamed, so a
 reader (or a Ctrl-C) never sees half a file. Matplotlib is imported only when a figure is drawn.
@@ -183,8 +183,8 @@ def plot_crack_map(specimen, cracks, path, *, x=None, y=None, magnify: float = 0
     specimen : sim.Specimen
         Grain polygons (if any) are drawn filled by mineral, particles as outlines otherwise.
     cracks : pandas.DataFrame
-        Columns ``x, y, kind, mode, size_m``; ``nx, ny`` (crack normal) when present turn the
-        markers into segments of length ``size_m`` along the crack plane.
+        Columns ``x, y, kind, mode, size_m``; ``nx, ny`` or ``angle_deg`` (crack-plane normal)
+        when present turn the markers into segments of length ``size_m`` along the crack plane.
     path : path of the PNG
     x, y : (N,) ndarray, m, optional
         Final particle positions: grains are drawn displaced by the mean displacement of their
@@ -211,21 +211,32 @@ def plot_crack_map(specimen, cracks, path, *, x=None, y=None, magnify: float = 0
         for m, name in enumerate(specimen.mineral_names):
             ax.plot([], [], "s", color=cmap(m % 9), label=str(name))
     else:
+        from matplotlib.collections import EllipseCollection
         px = specimen.x if x is None else np.asarray(x)
         py = specimen.y if y is None else np.asarray(y)
-        ax.scatter(px, py, s=2, c="0.8", linewidths=0)
+        d = 2.0 * specimen.r
+        ax.add_collection(EllipseCollection(d, d, 0.0, units="xy", offsets=np.c_[px, py],
+                                            offset_transform=ax.transData, facecolors="0.9",
+                                            edgecolors="0.7", linewidths=0.2))
     if cracks is not None and len(cracks):
         key = np.char.add(np.char.add(np.asarray(cracks["kind"]).astype(str), "_"),
                           np.asarray(cracks["mode"]).astype(str))
         cx, cy = np.asarray(cracks["x"], float), np.asarray(cracks["y"], float)
-        has_normal = "nx" in cracks and "ny" in cracks
+        if "nx" in cracks and "ny" in cracks:
+            nx, ny = np.asarray(cracks["nx"], float), np.asarray(cracks["ny"], float)
+        elif "angle_deg" in cracks:
+            a = np.radians(np.asarray(cracks["angle_deg"], float))
+            nx, ny = np.cos(a), np.sin(a)
+        else:
+            nx = ny = None
+        has_normal = nx is not None
         for kind, colour in _KIND_COLOURS.items():
             sel = key == kind
             if not np.any(sel):
                 continue
             if has_normal:
                 h = 0.5 * np.asarray(cracks["size_m"], float)[sel]
-                tx, ty = -np.asarray(cracks["ny"], float)[sel], np.asarray(cracks["nx"], float)[sel]
+                tx, ty = -ny[sel], nx[sel]
                 seg = np.stack([np.c_[cx[sel] - h * tx, cy[sel] - h * ty],
                                 np.c_[cx[sel] + h * tx, cy[sel] + h * ty]], axis=1)
                 ax.add_collection(LineCollection(seg, colors=colour, linewidths=1.2))
@@ -241,6 +252,7 @@ def plot_crack_map(specimen, cracks, path, *, x=None, y=None, magnify: float = 0
     ax.set_xlabel("x (m)")
     ax.set_ylabel("y (m)")
     ax.set_title(title)
-    ax.legend(fontsize=6, loc="upper right", framealpha=0.8)
+    if ax.get_legend_handles_labels()[0]:
+        ax.legend(fontsize=6, loc="upper right", framealpha=0.8)
     fig.tight_layout()
     return _save_figure(fig, path)

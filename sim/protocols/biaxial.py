@@ -1,0 +1,184 @@
+"""Biaxial (2D 'triaxial') compression with servo-held confinement.
+
+Stage 1 (consolidation): four rigid frictionless walls on the faces of ``box``; every wall is
+servo-controlled to the confining stress σ3 until all four wall stresses are within
+``consolidation_tol`` of it. Stage 2 (shear): the side walls stay on the servo (their length is
+updated to the current height every record); the top and bottom platens move at a constant
+strain rate until the post-peak stop.
+
+Reported (compression positive): ``ucs_mpa`` = peak axial stress σ1 (so that UCS and biaxial
+runs share a column), ``deviatoric_peak_mpa`` = peak of σ1 − σ3, E and ν from the deviatoric
+stress against the gauge strains, CI and CD as in UCS (on the deviatoric stress).
+"""
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+
+from .. import analysis
+from ..config import THICKNESS
+from . import loading as ld
+from .report import TestResult, base_summary, crack_summary
+from .ucs import compression_summary
+
+__all__ = ["run_biaxial", "DEFAULT_CONFINEMENT"]
+
+#: Default confining stress, Pa (the thesis's triaxial tests: σ2 = σ3 = 20 MPa).
+DEFAULT_CONFINEMENT = 20e6
+
+
+def _wall_stress(sim, k, axis, length):
+    return abs(float(np.asarray(sim.wall_force(k), float)[axis])) / (length * THICKNESS)
+
+
+def run_biaxial(specimen, *, confinement: float = DEFAULT_CONFINEMENT,
+                strain_rate: float = ld.DEFAULT_STRAIN_RATE,
+                post_peak: float | None = ld.DEFAULT_POST_PEAK, max_strain: float | None = None,
+                damping: float = 0.7, timestep_factor: float | None = None,
+                record_strain: float = ld.RECORD_STRAIN, ramp_records: int = 5,
+                consolidation_tol: float = 0.01, consolidation_steps: int = 200_000,
+                limit_strain: float = 0.08, out=None, progress: bool = True,
+                figures: bool = True,
+                checkpoint_every: int = 0, sim_options=None) -> TestResult:
+    """Biaxial compression at confining stress ``confinement`` (Pa).
+
+    Parameters
+    ----------
+    specimen : sim.Specimen
+    confinement : float, Pa
+        σ3 held by the side-wall servos (default 20 MPa).
+    consolidation_tol : float
+        Relative tolerance of every wall stress at the end of stage 1.
+    consolidation_steps : int
+        Step limit of stage 1 (a warning goes into the summary if it is reached).
+    strain_rate, post_peak, max_strain, damping, timestep_factor, record_strain, ramp_records,
+    limit_strain, out, progress, figures, checkpoint_every, sim_options :
+        As in :func:`sim.protocols.ucs.run_ucs`.
+
+    Returns
+    -------
+    result : TestResult
+    """
+    if not (confinement > 0 and math.isfinite(confinement)):
+        raise ValueError(f"'confinement' = {confinement!r}, expected a positive stress (Pa)")
+    if not (strain_rate > 0 and math.isfinite(strain_rate)):
+        raise ValueError(f"'strain_rate' = {strain_rate!r}, expected a positive number (1/s)")
+    stop = ld.StopRule(post_peak=post_peak, max_strain=max_strain, min_peak_pa=confinement)
+    specimen.validate("specimen")
+    opts = dict(damping=damping, **(sim_options or {}))
+    if timestep_factor is not None:
+        opts["timestep_factor"] = timestep_factor
+    sim = ld.make_simulation(specimen, **opts)
+    box = specimen.box
+    bot, top = ld.add_platens(sim, box, axis=1, fric=0.0)
+    left, right = ld.add_platens(sim, box, axis=0, fric=0.0)
+
+    def sizes():
+        return ld.platen_gap(sim, bot, top, 1), ld.platen_gap(sim, left, right, 0)
+
+    # ---- stage 1: isotropic consolidation by four servos
+    t0 = time.perf_counter()
+    h, w = sizes()
+    for k, length in ((bot, w), (top, w), (left, h), (right, h)):
+        sim.set_servo(k, confinement, length)
+    dt = float(sim.dt)
+    steps1, ok = 0, False
+    check = 200
+    while steps1 < consolidation_steps:
+        sim.cycle(check)
+        steps1 += check
+        h, w = sizes()
+        for k in (bot, top):
+            sim.set_servo(k, confinement, w)
+        for k in (left, right):
+            sim.set_servo(k, confinement, h)
+        errs = [abs(_wall_stress(sim, k, ax, ln) / confinement - 1.0)
+                for k, ax, ln in ((bot, 1, w), (top, 1, w), (left, 0, h), (right, 0, h))]
+        if max(errs) < consolidation_tol:
+            ok = True
+            break
+    consolidation_s = time.perf_counter() - t0
+
+    # ---- stage 2: axial loading, side servos kept
+    sim.clear_servo(bot)
+    sim.clear_servo(top)
+    h0, w0 = sizes()
+    v = 0.5 * strain_rate * h0
+    x0, y0 = np.array(sim.x, copy=True), np.array(sim.y, copy=True)
+    cur_box = np.array([np.asarray(sim.wall_position(left))[0],
+                        np.asarray(sim.wall_position(right))[0],
+                        np.asarray(sim.wall_position(bot))[1],
+                        np.asarray(sim.wall_position(top))[1]])
+    gauge = ld.gauge_indices(x0, y0, cur_box)
+    chunk = max(1, int(round(record_strain / (strain_rate * dt))))
+    stop_strain = max_strain if max_strain is not None else limit_strain
+    max_steps = int(math.ceil((min(stop_strain, limit_strain) + ramp_records * record_strain)
+                              / (strain_rate * dt))) + chunk
+    c_start = ld.crack_tally(sim)
+
+    def on_chunk(k):
+        f = min(1.0, (k + 1) / max(1, ramp_records))
+        sim.set_wall_velocity(bot, 0.0, f * v)
+        sim.set_wall_velocity(top, 0.0, -f * v)
+        h, _ = sizes()
+        sim.set_servo(left, confinement, h)
+        sim.set_servo(right, confinement, h)
+
+    def record():
+        h, w = sizes()
+        ea = (h0 - h) / h0
+        el = (w0 - w) / w0
+        s1 = ld.platen_force(sim, bot, top, 1) / (w * THICKNESS)
+        s3 = ld.platen_force(sim, left, right, 0) / (h * THICKNESS)
+        gl, ga = ld.gauge_strains(x0, y0, sim.x, sim.y, gauge)
+        c = ld.crack_tally(sim)
+        ek, es = ld.energies(sim)
+        return {"step": int(sim.step), "time_s": float(sim.time), "axial_strain": ea,
+                "lateral_strain": el, "volumetric_strain": ea + el,
+                "axial_stress_mpa": s1 / 1e6, "confining_stress_mpa": s3 / 1e6,
+                **{f"cracks_{k}": c[k] for k in analysis.CRACK_KINDS},
+                "cracks_total": c["total"], "kinetic_energy_j": ek, "strain_energy_j": es,
+                "deviatoric_stress_mpa": (s1 - s3) / 1e6, "gauge_axial_strain": ga,
+                "gauge_lateral_strain": gl, "cracks_loading": c["total"] - c_start["total"]}
+
+    options = dict(confinement_mpa=confinement / 1e6, strain_rate_per_s=strain_rate,
+                   platen_velocity_m_per_s=v, post_peak=post_peak, max_strain=max_strain,
+                   damping=damping, timestep_factor=timestep_factor)
+    loop = ld.LoadingLoop(sim=sim, record=record, chunk=chunk, max_steps=max_steps, stop=stop,
+                          on_chunk=on_chunk, progress=progress, desc="biaxial",
+                          checkpoint_every=checkpoint_every,
+                          checkpoint=None if out is None else f"{out}/checkpoint.npz")
+
+    def finish():
+        hist = loop.history()
+        cracks = ld.crack_frame(sim)
+        summary = base_summary("biaxial", specimen, loop, sim, options)
+        summary.update({"confining_mpa": confinement / 1e6, "consolidation_steps": steps1,
+                        "consolidation_converged": ok, "consolidation_s": consolidation_s})
+        summary["steps"] += steps1
+        summary["wall_s"] += consolidation_s
+        n = specimen.n_particles
+        summary["particle_steps_per_s"] = n * summary["steps"] / summary["wall_s"]
+        if len(hist) > 2:
+            dev = compression_summary(hist, stress_col="deviatoric_stress_mpa")
+            s1 = hist["axial_stress_mpa"].to_numpy(float)
+            summary.update(dev)
+            summary["deviatoric_peak_mpa"] = dev["ucs_mpa"]
+            summary["ucs_mpa"] = float(np.max(s1))
+            summary["stress_measure"] = ("ucs_mpa: peak axial stress sigma1; E, nu, ci_mpa, "
+                                         "cd_mpa on the deviatoric stress sigma1 - sigma3")
+        summary.update(crack_summary(cracks))
+        res = TestResult(summary=summary, history=hist, cracks=cracks, sim=sim,
+                         specimen=specimen, stress_column="axial_stress_mpa")
+        if out is not None:
+            res.write(out, figures=figures)
+        return res
+
+    try:
+        loop.run()
+    except KeyboardInterrupt:
+        finish()
+        raise
+    return finish()

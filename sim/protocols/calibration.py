@@ -1,0 +1,153 @@
+"""The DEM black box of :func:`sim.calibrate.calibrate`: UCS + tension runs on specimens.
+
+``calibrate_specimens`` loads the specimens, builds ``evaluate(params) -> {E, UCS, sigma_t}``
+(a UCS test for E and UCS, a direct-tension or Brazilian test for σt, on the first specimen) and
+``evaluate_seeds`` (the same on every specimen), runs the calibration, and writes
+
+- ``calibrated_params.yaml`` — the parameter file (load with ``--params``);
+- ``calibration_report.json`` — every evaluation, multipliers, Jacobian, seed summary;
+- ``calibration_report.md`` — the same as tables (iterations, evaluations, wall time, final
+  errors, seed spread);
+- ``calibration_log.jsonl`` — one line per evaluation as it happens (survives Ctrl-C).
+"""
+from __future__ import annotations
+
+import json
+import os
+import time
+
+from ..calibrate import DEFAULT_TARGETS, calibrate
+from ..errors import InputError
+from .outputs import json_ready, write_json_atomic, write_text_atomic
+from .parameters import apply_parameters, load_parameters, save_parameters, thesis_parameters
+
+__all__ = ["make_evaluator", "calibrate_specimens", "report_markdown"]
+
+
+def make_evaluator(specimen, *, strain_rate=None, tension_test="direct", progress=False):
+    """``evaluate(params) -> {"E", "UCS", "sigma_t"}`` (Pa) on one specimen.
+
+    E is the UCS test's tangent modulus at 50 % of the peak (gauge strain), UCS its peak, σt
+    the peak of a direct-tension test (or a Brazilian test on the disc cut from the specimen).
+    """
+    from .brazilian import run_brazilian
+    from .tension import run_tension
+    from .ucs import run_ucs
+    if tension_test not in ("direct", "brazilian"):
+        raise ValueError(f"'tension_test' = {tension_test!r}, expected 'direct' or 'brazilian'")
+    kw = {} if strain_rate is None else {"strain_rate": strain_rate}
+
+    def evaluate(params):
+        spec = apply_parameters(specimen, params)
+        u = run_ucs(spec, progress=progress, **kw).summary
+        fn = run_tension if tension_test == "direct" else run_brazilian
+        t = fn(spec, progress=progress, **kw).summary
+        return {"E": u["E_gpa"] * 1e9, "UCS": u["ucs_mpa"] * 1e6,
+                "sigma_t": t["tensile_mpa"] * 1e6, "nu": u["nu"],
+                "wall_s": u["wall_s"] + t["wall_s"]}
+
+    return evaluate
+
+
+def report_markdown(result, targets, *, specimens=(), extra="") -> str:
+    """The calibration report as markdown tables."""
+    names = list(targets)
+    unit = {"E": ("GPa", 1e9), "UCS": ("MPa", 1e6), "sigma_t": ("MPa", 1e6)}
+    lines = ["# Calibration report", "",
+             f"- converged (every target within acceptance): **{result.converged}**",
+             f"- iterations (search evaluations): {result.n_iterations}; evaluations in all: "
+             f"{result.n_evaluations}; wall time: {result.wall_s:.1f} s",
+             "- multipliers on the starting set: " + ", ".join(
+                 f"{k} × {v:.4g}" for k, v in result.multipliers.items()),
+             "- specimens: " + ", ".join(str(s) for s in specimens), ""]
+    if extra:
+        lines += [extra, ""]
+    head = "| phase | it | seed | " + " | ".join(
+        f"{k} ({unit.get(k, ('', 1))[0]}) | err {k}" for k in names) + " | s |"
+    lines += ["## Evaluations", "", head, "|" + "---|" * (4 + 2 * len(names))]
+    for e in result.evaluations:
+        cells = []
+        for k in names:
+            u, f = unit.get(k, ("", 1.0))
+            cells += [f"{e['responses'][k] / f:.4g}", f"{100 * e['errors'][k]:+.2f} %"]
+        seed = "" if e["seed"] is None else str(e["seed"])
+        lines.append(f"| {e['phase']} | {e['iteration']} | {seed} | " + " | ".join(cells)
+                     + f" | {e['seconds']:.1f} |")
+    lines += ["", "## Final", "", "| target | value | final error | seed mean | seed std | "
+              "seed min | seed max |", "|---|---|---|---|---|---|---|"]
+    for k in names:
+        u, f = unit.get(k, ("", 1.0))
+        s = result.seed_summary.get(k)
+        row = f"| {k} | {targets[k] / f:.4g} {u} | {100 * result.final_errors[k]:+.2f} % |"
+        row += (f" {s['mean'] / f:.4g} | {s['std'] / f:.3g} | {s['min'] / f:.4g} | "
+                f"{s['max'] / f:.4g} |" if s else " | | | |")
+        lines.append(row)
+    return "\n".join(lines) + "\n"
+
+
+def calibrate_specimens(paths, *, out, params=None, targets=None, tol=0.03, accept=0.05,
+                        max_evaluations=10, strain_rate=None, tension_test="direct",
+                        progress=True, knobs=None):
+    """Calibrate on specimen files and write the parameter file and the report into ``out``.
+
+    Parameters
+    ----------
+    paths : sequence of path
+        ``specimen.npz`` files; the first for the search, all for the seed average.
+    out : path
+    params : path or dict, optional
+        Starting parameters (default: thesis Ch. 4, :func:`thesis_parameters`).
+    targets : dict, optional
+        ``{"E", "UCS", "sigma_t"}`` in Pa (default thesis lab 65 GPa, 135 MPa, 18 MPa).
+    tol, accept, max_evaluations, knobs :
+        See :func:`sim.calibrate.calibrate`.
+    strain_rate : float, optional
+        Loading rate of the tests (1/s).
+    tension_test : {"direct", "brazilian"}
+
+    Returns
+    -------
+    result : sim.calibrate.CalibrationResult
+    """
+    from ..specimen import Specimen
+    if not paths:
+        raise InputError("calibrate: expected at least one specimen file")
+    specs = [Specimen.load(p) for p in paths]
+    start = (thesis_parameters() if params is None else
+             load_parameters(params) if isinstance(params, (str, os.PathLike)) else params)
+    for p, s in zip(paths, specs):   # fail early on a name mismatch
+        apply_parameters(s, start)
+    targets = dict(DEFAULT_TARGETS if targets is None else targets)
+    os.makedirs(out, exist_ok=True)
+    log_path = os.path.join(out, "calibration_log.jsonl")
+    open(log_path, "w").close()
+
+    def log(rec):
+        with open(log_path, "a", encoding="utf-8") as f:
+            f.write(json.dumps(json_ready(rec)) + "\n")
+        if progress:
+            errs = ", ".join(f"{k} {100 * v:+.1f}%" for k, v in rec["errors"].items())
+            print(f"[calibrate] {rec['phase']} {rec['iteration']}"
+                  f"{'' if rec['seed'] is None else ' seed ' + str(rec['seed'])}: {errs} "
+                  f"({rec['seconds']:.0f} s)", flush=True)
+
+    evals = [make_evaluator(s, strain_rate=strain_rate, tension_test=tension_test)
+             for s in specs]
+    t0 = time.perf_counter()
+    kw = {} if knobs is None else {"knobs": knobs}
+    seeds = (lambda p: [e(p) for e in evals]) if len(evals) > 1 else None
+    res = calibrate(evals[0], start, targets=targets, tol=tol, accept=accept,
+                    max_evaluations=max_evaluations, evaluate_seeds=seeds, progress=log, **kw)
+    wall = time.perf_counter() - t0
+    header = (f"Calibrated by gbmsim calibrate on {len(specs)} specimen(s); targets "
+              + ", ".join(f"{k}={v:.4g} Pa" for k, v in targets.items())
+              + f"; converged={res.converged}; multipliers "
+              + ", ".join(f"{k}={v:.4g}" for k, v in res.multipliers.items()))
+    save_parameters(os.path.join(out, "calibrated_params.yaml"), res.params, header=header)
+    rep = res.to_dict()
+    rep.update(targets=targets, specimens=[str(p) for p in paths], wall_s=wall,
+               tension_test=tension_test, strain_rate=strain_rate)
+    write_json_atomic(os.path.join(out, "calibration_report.json"), rep)
+    write_text_atomic(os.path.join(out, "calibration_report.md"),
+                      report_markdown(res, targets, specimens=paths))
+    return res

@@ -1,0 +1,335 @@
+"""Shared machinery of the laboratory protocols: platens, gauges, crack tallies, the loading loop.
+
+Everything that touches the engine (:class:`sim.simulation.Simulation`) goes through the small
+functions here, so that the protocols hold no engine details. Sign convention of everything
+returned: **compression positive** (stress and strain).
+"""
+from __future__ import annotations
+
+import math
+import os
+import signal
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+
+from ..analysis import CRACK_KINDS, is_post_peak
+from .outputs import CRACK_COLUMNS, HISTORY_COLUMNS
+
+__all__ = ["DEFAULT_STRAIN_RATE", "DEFAULT_POST_PEAK", "RECORD_STRAIN", "GAUGE_FRACTION",
+           "make_simulation", "add_platens", "gauge_indices", "side_indices",
+           "gauge_strains", "side_lateral_strain", "crack_frame", "crack_tally", "energies",
+           "LoadingLoop", "StopRule"]
+
+#: Default platen strain rate, 1/s (each platen moves at rate × H / 2). Chosen by the
+#: convergence study benchmarks/ucs_convergence.py (docs/labtests.md).
+DEFAULT_STRAIN_RATE = 0.5
+#: Default post-peak stop: the run ends when the stress falls below this fraction of the peak.
+DEFAULT_POST_PEAK = 0.8
+#: Axial strain between two history records (the record interval is derived from it).
+RECORD_STRAIN = 2e-5
+#: The strain gauge is the central region spanning this fraction of the width and height.
+GAUGE_FRACTION = 0.5
+
+
+def make_simulation(specimen, **options):
+    """Build the engine's Simulation from a specimen (keyword options passed through)."""
+    from ..simulation import Simulation
+    return Simulation(specimen, **options)
+
+
+def add_platens(sim, box, *, axis: int = 1, fric: float = 0.0, emod=None):
+    """Two rigid frictionless platens on the faces of ``box`` normal to ``axis`` (1 = y).
+
+    Returns
+    -------
+    lo, hi : int
+        Wall indices of the platen at the low and at the high face; normals point inwards.
+    """
+    xmin, xmax, ymin, ymax = (float(v) for v in box)
+    kw = dict(fric=fric) if emod is None else dict(fric=fric, emod=emod)
+    if axis == 1:
+        lo = sim.add_wall((0.5 * (xmin + xmax), ymin), (0.0, 1.0), **kw)
+        hi = sim.add_wall((0.5 * (xmin + xmax), ymax), (0.0, -1.0), **kw)
+    else:
+        lo = sim.add_wall((xmin, 0.5 * (ymin + ymax)), (1.0, 0.0), **kw)
+        hi = sim.add_wall((xmax, 0.5 * (ymin + ymax)), (-1.0, 0.0), **kw)
+    return lo, hi
+
+
+def platen_gap(sim, lo: int, hi: int, axis: int = 1) -> float:
+    """Distance between two parallel platens, m."""
+    return float(np.asarray(sim.wall_position(hi))[axis] - np.asarray(sim.wall_position(lo))[axis])
+
+
+def platen_force(sim, lo: int, hi: int, axis: int = 1) -> float:
+    """Mean compressive force of the particles on two facing platens, N (compression +)."""
+    f_lo = np.asarray(sim.wall_force(lo), float)[axis]     # pushed towards -axis: negative
+    f_hi = np.asarray(sim.wall_force(hi), float)[axis]     # pushed towards +axis: positive
+    return 0.5 * (f_hi - f_lo)
+
+
+def gauge_indices(x, y, box, *, fraction: float = GAUGE_FRACTION, min_count: int = 6):
+    """Particles whose centres lie in the central ``fraction`` of the box in x and in y.
+
+    Returns
+    -------
+    idx : (G,) ndarray of int64
+    """
+    xmin, xmax, ymin, ymax = box
+    cx, cy = 0.5 * (xmin + xmax), 0.5 * (ymin + ymax)
+    hx, hy = 0.5 * fraction * (xmax - xmin), 0.5 * fraction * (ymax - ymin)
+    idx = np.nonzero((np.abs(x - cx) <= hx) & (np.abs(y - cy) <= hy))[0]
+    if idx.size < min_count:
+        raise ValueError(f"strain gauge holds {idx.size} particles, expected >= {min_count}: "
+                         "the specimen is too small for gauge fraction {fraction}")
+    return idx
+
+
+def side_indices(x, r, box, *, depth=None):
+    """Particles touching the left and the right face of ``box`` (within ``depth``, m).
+
+    ``depth`` defaults to one mean diameter.
+    """
+    d = 2.0 * float(np.mean(r)) if depth is None else depth
+    left = np.nonzero(x - r <= box[0] + d)[0]
+    right = np.nonzero(x + r >= box[1] - d)[0]
+    return left, right
+
+
+def gauge_strains(x0, y0, x, y, idx):
+    """Mean strain of a particle region by a least-squares affine fit of the displacements.
+
+    Fits ``u = c + A (X - X̄)`` to the displacements of the particles ``idx`` (like strain gauges
+    glued on the central part of a lab specimen: platen contact compliance is excluded).
+
+    Parameters
+    ----------
+    x0, y0, x, y : (N,) ndarray of float64, m
+        Reference and current positions.
+    idx : (G,) ndarray of int
+
+    Returns
+    -------
+    eps_xx, eps_yy : float
+        Normal strains, **compression positive** (``-du_x/dX``, ``-du_y/dY``).
+
+    Examples
+    --------
+    >>> X, Y = np.meshgrid(np.arange(3.0), np.arange(3.0))
+    >>> X, Y = X.ravel(), Y.ravel()
+    >>> exx, eyy = gauge_strains(X, Y, X * 1.001, Y * 0.998, np.arange(9))
+    >>> round(exx, 12), round(eyy, 12)
+    (-0.001, 0.002)
+    """
+    X, Y = x0[idx], y0[idx]
+    M = np.c_[np.ones(idx.size), X - X.mean(), Y - Y.mean()]
+    ux, uy = x[idx] - X, y[idx] - Y
+    cx = np.linalg.lstsq(M, ux, rcond=None)[0]
+    cy = np.linalg.lstsq(M, uy, rcond=None)[0]
+    return -float(cx[1]), -float(cy[2])
+
+
+def side_lateral_strain(x0, x, left, right) -> float:
+    """Lateral strain from the mean positions of the side particles (compression +)."""
+    w0 = x0[right].mean() - x0[left].mean()
+    w = x[right].mean() - x[left].mean()
+    return float((w0 - w) / w0)
+
+
+def _cracks_obj(sim):
+    return getattr(sim, "cracks", None)
+
+
+def crack_frame(sim) -> pd.DataFrame:
+    """The engine's crack log as a DataFrame with at least :data:`CRACK_COLUMNS`."""
+    log = _cracks_obj(sim)
+    frame = log.to_frame() if log is not None else pd.DataFrame()
+    frame = frame.copy()
+    for c in CRACK_COLUMNS:
+        if c not in frame:
+            frame[c] = pd.Series(dtype=float)
+    rest = [c for c in frame.columns if c not in CRACK_COLUMNS]
+    return frame[list(CRACK_COLUMNS) + rest]
+
+
+def crack_tally(sim) -> dict:
+    """Cumulative crack counts by kind (:data:`sim.analysis.CRACK_KINDS`) and total."""
+    log = _cracks_obj(sim)
+    out = dict.fromkeys(CRACK_KINDS, 0)
+    if log is None:
+        out["total"] = 0
+        return out
+    counts = getattr(log, "counts", None)
+    if callable(counts):
+        c = counts()
+        out.update({k: int(c.get(k, 0)) for k in CRACK_KINDS})
+    else:
+        f = log.to_frame()
+        if len(f):
+            key = f["kind"].astype(str) + "_" + f["mode"].astype(str)
+            out.update({k: int((key == k).sum()) for k in CRACK_KINDS})
+    out["total"] = int(sum(out[k] for k in CRACK_KINDS))
+    return out
+
+
+def energies(sim) -> tuple:
+    """(kinetic, strain) energy, J, from ``sim.energy()`` when the engine provides them."""
+    e = sim.energy() if hasattr(sim, "energy") else {}
+    if not isinstance(e, dict):
+        return math.nan, math.nan
+    kin = e.get("kinetic", e.get("kinetic_j", math.nan))
+    strain = e.get("strain", e.get("strain_j", e.get("bond_strain", math.nan)))
+    if "strain" not in e and "strain_j" not in e:
+        parts = [v for k, v in e.items() if "strain" in k]
+        strain = float(sum(parts)) if parts else strain
+    return float(kin), float(strain)
+
+
+@dataclass
+class StopRule:
+    """When a strain-controlled test ends.
+
+    Attributes
+    ----------
+    post_peak : float or None
+        Stop once the stress has fallen below this fraction of the peak (after the peak).
+    max_strain : float or None
+        Stop at this loading strain (elastic checks).
+    min_peak_pa : float
+        A peak below this stress does not count (start-up noise).
+    """
+
+    post_peak: float | None = DEFAULT_POST_PEAK
+    max_strain: float | None = None
+    min_peak_pa: float = 0.0
+
+    def __post_init__(self):
+        if self.post_peak is None and self.max_strain is None:
+            raise ValueError("give 'post_peak' or 'max_strain': the test would never stop")
+        if self.post_peak is not None and not 0.0 < self.post_peak < 1.0:
+            raise ValueError(f"'post_peak' = {self.post_peak}, expected in (0, 1)")
+        if self.max_strain is not None and not self.max_strain > 0:
+            raise ValueError(f"'max_strain' = {self.max_strain}, expected > 0")
+
+    def reason(self, strain, stress):
+        """``"post_peak"``, ``"max_strain"`` or None."""
+        if self.max_strain is not None and strain[-1] >= self.max_strain:
+            return "max_strain"
+        if self.post_peak is not None and is_post_peak(stress, fraction=self.post_peak,
+                                                       min_peak=self.min_peak_pa):
+            return "post_peak"
+        return None
+
+
+@dataclass
+class LoadingLoop:
+    """Cycle, record, check the stop rule; Ctrl-C leaves a checkpoint and partial outputs.
+
+    Attributes
+    ----------
+    sim : Simulation
+    record : callable
+        ``record() -> dict`` one history row (keys of :data:`HISTORY_COLUMNS` and more).
+    chunk : int
+        Steps between records.
+    max_steps : int
+        Safety limit on the number of loading steps.
+    stop : StopRule
+    stress_key, strain_key : str
+        History columns the stop rule looks at (stress in MPa).
+    on_chunk : callable, optional
+        Called before each chunk with the chunk index (velocity ramps, servo updates).
+    checkpoint : path, optional
+        Where ``sim.save`` writes on Ctrl-C (and every ``checkpoint_every`` records).
+    progress : bool
+        tqdm progress bar on stderr.
+    """
+
+    sim: object
+    record: object
+    chunk: int
+    max_steps: int
+    stop: StopRule
+    stress_key: str = "axial_stress_mpa"
+    strain_key: str = "axial_strain"
+    on_chunk: object = None
+    checkpoint: object = None
+    checkpoint_every: int = 0
+    progress: bool = True
+    desc: str = "loading"
+    rows: list = field(default_factory=list)
+    stop_reason: str = ""
+    interrupted: bool = False
+    wall_s: float = 0.0
+    steps: int = 0
+
+    def history(self) -> pd.DataFrame:
+        """Recorded rows as a DataFrame, :data:`HISTORY_COLUMNS` first."""
+        h = pd.DataFrame(self.rows)
+        for c in HISTORY_COLUMNS:
+            if c not in h:
+                h[c] = pd.Series(np.nan, index=h.index, dtype=float)
+        rest = [c for c in h.columns if c not in HISTORY_COLUMNS]
+        return h[list(HISTORY_COLUMNS) + rest]
+
+    def save_checkpoint(self):
+        if self.checkpoint is not None:
+            os.makedirs(os.path.dirname(os.path.abspath(self.checkpoint)), exist_ok=True)
+            self.sim.save(self.checkpoint)
+
+    def run(self):
+        """Run until the stop rule fires, ``max_steps`` pass, or Ctrl-C (re-raised after the
+        checkpoint is written: the caller writes the partial outputs)."""
+        bar = None
+        if self.progress:
+            from tqdm import tqdm
+            bar = tqdm(total=self.max_steps, desc=self.desc, unit="step", leave=False,
+                       dynamic_ncols=True, mininterval=0.5)
+        t0 = time.perf_counter()
+        strain, stress = [], []
+        if not self.rows:
+            self.rows.append(self.record())
+        strain.extend(r[self.strain_key] for r in self.rows)
+        stress.extend(r[self.stress_key] * 1e6 for r in self.rows)
+        k = 0
+        try:
+            while self.steps < self.max_steps:
+                if self.on_chunk is not None:
+                    self.on_chunk(k)
+                n = min(self.chunk, self.max_steps - self.steps)
+                self.sim.cycle(n)
+                self.steps += n
+                row = self.record()
+                self.rows.append(row)
+                strain.append(row[self.strain_key])
+                stress.append(row[self.stress_key] * 1e6)
+                k += 1
+                if bar is not None:
+                    bar.update(n)
+                    bar.set_postfix_str(f"{self.stress_key}={row[self.stress_key]:.1f} "
+                                        f"peak={max(stress) / 1e6:.1f}")
+                if self.checkpoint_every and k % self.checkpoint_every == 0:
+                    self.save_checkpoint()
+                why = self.stop.reason(strain, stress)
+                if why:
+                    self.stop_reason = why
+                    break
+            else:
+                self.stop_reason = "max_steps"
+        except KeyboardInterrupt:
+            self.interrupted = True
+            self.stop_reason = "interrupted"
+            prev = signal.signal(signal.SIGINT, signal.SIG_IGN)   # a second Ctrl-C waits
+            try:
+                self.save_checkpoint()
+            finally:
+                signal.signal(signal.SIGINT, prev)
+            raise
+        finally:
+            self.wall_s += time.perf_counter() - t0
+            if bar is not None:
+                bar.close()
+        return self

@@ -1,0 +1,178 @@
+"""Uniaxial compression (UCS) test: rigid frictionless platens at ``box``, strain-controlled.
+
+Measured (compression positive, report units in the names):
+
+- axial stress = mean platen force / (initial width × t); axial strain from the platen gap;
+- lateral strain from the side particles (one diameter deep at each face) and volumetric
+  strain = axial + lateral (specimen scale; used for CD);
+- gauge strains from an affine fit of the central half of the specimen (like strain gauges:
+  platen contact compliance excluded; used for E and ν);
+- cumulative cracks by kind, kinetic and strain energy.
+
+Stops at ``post_peak`` × peak after the peak (default 0.8, as the thesis) or at ``max_strain``.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .. import analysis
+from ..config import THICKNESS
+from . import loading as ld
+from .report import TestResult, base_summary, crack_summary
+
+__all__ = ["run_ucs", "compression_summary"]
+
+
+def compression_summary(history, *, stress_col="axial_stress_mpa", e_method="tangent",
+                        ci_fraction=analysis.CI_FRACTION) -> dict:
+    """E, ν (gauge), E from the platens, peak, CI, CD from a compression history (report units).
+
+    Uses ``gauge_axial_strain``/``gauge_lateral_strain`` for E and ν, ``axial_strain`` for the
+    platen modulus, ``volumetric_strain`` for CD and ``cracks_total`` for CI.
+    """
+    s = history[stress_col].to_numpy(float) * 1e6
+    ga = history["gauge_axial_strain"].to_numpy(float)
+    gl = history["gauge_lateral_strain"].to_numpy(float)
+    ea = history["axial_strain"].to_numpy(float)
+    ip = analysis.peak_index(s)
+    return {
+        "E_gpa": analysis.young_modulus(ga, s, method=e_method) / 1e9,
+        "nu": analysis.poisson_ratio(ga, gl, s),
+        "E_platen_gpa": analysis.young_modulus(ea, s, method=e_method) / 1e9,
+        "ucs_mpa": float(s[ip]) / 1e6,
+        "ci_mpa": analysis.crack_initiation(s, history["cracks_total"].to_numpy(float),
+                                            fraction=ci_fraction) / 1e6,
+        "cd_mpa": analysis.crack_damage(s, history["volumetric_strain"].to_numpy(float)) / 1e6,
+        "peak_axial_strain": float(ea[ip]),
+        "e_method": f"{e_method} at 50 % of peak, gauge strain",
+        "ci_criterion": f"cumulative cracks >= max(1, ceil({ci_fraction} x count at peak))",
+        "cd_criterion": "maximum of volumetric strain before the peak",
+    }
+
+
+def _check_rate(strain_rate):
+    if not (isinstance(strain_rate, (int, float)) and strain_rate > 0
+            and math.isfinite(strain_rate)):
+        raise ValueError(f"'strain_rate' = {strain_rate!r}, expected a positive number (1/s)")
+
+
+def run_ucs(specimen, *, strain_rate: float = ld.DEFAULT_STRAIN_RATE,
+            post_peak: float | None = ld.DEFAULT_POST_PEAK, max_strain: float | None = None,
+            damping: float = 0.7, timestep_factor: float | None = None,
+            record_strain: float = ld.RECORD_STRAIN, ramp_records: int = 5,
+            e_method: str = "tangent", limit_strain: float = 0.05, out=None,
+            progress: bool = True, figures: bool = True, checkpoint_every: int = 0,
+                sim_options=None) -> TestResult:
+    """Uniaxial compression of ``specimen`` between rigid frictionless platens.
+
+    Parameters
+    ----------
+    specimen : sim.Specimen
+    strain_rate : float, 1/s
+        Platen strain rate (each platen moves at rate × H / 2), reached after a linear ramp
+        over the first ``ramp_records`` records.
+    post_peak : float or None
+        Stop when the stress falls below this fraction of the peak (default 0.8).
+    max_strain : float or None
+        Stop at this axial strain (elastic checks where nothing breaks).
+    damping, timestep_factor : float
+        Engine options (local damping α; safety factor on the critical step).
+    record_strain : float
+        Axial strain between history records.
+    e_method : {"tangent", "secant"}
+    limit_strain : float
+        Safety stop at this axial strain.
+    out : path, optional
+        Write the results there (and ``checkpoint.npz`` on Ctrl-C).
+    progress : bool
+        tqdm progress bar.
+    figures : bool
+        Also draw stress_strain.png and crack_map.png when writing ``out``.
+    checkpoint_every : int
+        Also checkpoint every this many records (0: only on Ctrl-C).
+    sim_options : dict, optional
+        More keyword options for the engine's ``Simulation``.
+
+    Returns
+    -------
+    result : TestResult
+        ``summary`` has ``E_gpa, nu, ucs_mpa, ci_mpa, cd_mpa, cracks, P_sim, steps, wall_s,
+        particle_steps_per_s`` (DESIGN.md §4) and more.
+
+    Raises
+    ------
+    ValueError
+        Bad rate or stop rule. KeyboardInterrupt is re-raised after the checkpoint and the
+        partial outputs are written.
+    """
+    _check_rate(strain_rate)
+    stop = ld.StopRule(post_peak=post_peak, max_strain=max_strain)
+    specimen.validate("specimen")
+    opts = dict(damping=damping, **(sim_options or {}))
+    if timestep_factor is not None:
+        opts["timestep_factor"] = timestep_factor
+    sim = ld.make_simulation(specimen, **opts)
+    box = specimen.box
+    lo, hi = ld.add_platens(sim, box, axis=1, fric=0.0)
+    h0 = ld.platen_gap(sim, lo, hi)
+    w0 = float(box[1] - box[0])
+    v = 0.5 * strain_rate * h0
+    x0, y0 = np.array(sim.x, copy=True), np.array(sim.y, copy=True)
+    gauge = ld.gauge_indices(x0, y0, box)
+    left, right = ld.side_indices(x0, specimen.r, box)
+    dt = float(sim.dt)
+    chunk = max(1, int(round(record_strain / (strain_rate * dt))))
+    stop_strain = max_strain if max_strain is not None else limit_strain
+    max_steps = int(math.ceil((min(stop_strain, limit_strain) + ramp_records * record_strain)
+                              / (strain_rate * dt))) + chunk
+
+    def on_chunk(k):
+        f = min(1.0, (k + 1) / max(1, ramp_records))
+        sim.set_wall_velocity(lo, 0.0, f * v)
+        sim.set_wall_velocity(hi, 0.0, -f * v)
+
+    def record():
+        x, y = sim.x, sim.y
+        ea = (h0 - ld.platen_gap(sim, lo, hi)) / h0
+        el = ld.side_lateral_strain(x0, x, left, right)
+        gl, ga = ld.gauge_strains(x0, y0, x, y, gauge)
+        c = ld.crack_tally(sim)
+        ek, es = ld.energies(sim)
+        return {"step": int(sim.step), "time_s": float(sim.time), "axial_strain": ea,
+                "lateral_strain": el, "volumetric_strain": ea + el,
+                "axial_stress_mpa": ld.platen_force(sim, lo, hi) / (w0 * THICKNESS) / 1e6,
+                "confining_stress_mpa": 0.0,
+                **{f"cracks_{k}": c[k] for k in analysis.CRACK_KINDS},
+                "cracks_total": c["total"], "kinetic_energy_j": ek, "strain_energy_j": es,
+                "gauge_axial_strain": ga, "gauge_lateral_strain": gl}
+
+    options = dict(strain_rate_per_s=strain_rate, platen_velocity_m_per_s=v,
+                   post_peak=post_peak, max_strain=max_strain, damping=damping,
+                   timestep_factor=timestep_factor, record_strain=record_strain,
+                   e_method=e_method)
+    loop = ld.LoadingLoop(sim=sim, record=record, chunk=chunk, max_steps=max_steps, stop=stop,
+                          on_chunk=on_chunk, progress=progress, desc="ucs",
+                          checkpoint_every=checkpoint_every,
+                          checkpoint=None if out is None else f"{out}/checkpoint.npz")
+
+    def finish():
+        hist = loop.history()
+        cracks = ld.crack_frame(sim)
+        summary = base_summary("ucs", specimen, loop, sim, options)
+        if len(hist) > 2:
+            summary.update(compression_summary(hist, e_method=e_method))
+        summary.update(crack_summary(cracks))
+        res = TestResult(summary=summary, history=hist, cracks=cracks, sim=sim,
+                         specimen=specimen)
+        if out is not None:
+            res.write(out, figures=figures)
+        return res
+
+    try:
+        loop.run()
+    except KeyboardInterrupt:
+        finish()
+        raise
+    return finish()
