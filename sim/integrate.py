@@ -99,6 +99,37 @@ def particle_range(lo, hi, dt, alpha, step_lim, has_walls, x, y, vx, vy, w, fx, 
     return maxd2, bad, work
 
 
+@njit
+def gather_range(lo, hi, has_walls, fx, fy, fm, wfx, wfy, wfm, bptr, bref, bfx, bfy, bmom, cptr,
+                 cref, cfx, cfy, cmom):
+    """Sum the current pair (and wall) forces on particles ``lo:hi`` into fx, fy, fm only."""
+    for p in range(lo, hi):
+        sx = 0.0
+        sy = 0.0
+        sm = 0.0
+        for q in range(bptr[p], bptr[p + 1]):
+            ref = bref[q]
+            k = ref >> 1
+            s = 2.0 * (ref & 1) - 1.0
+            sx += s * bfx[k]
+            sy += s * bfy[k]
+            sm += bmom[ref]
+        for q in range(cptr[p], cptr[p + 1]):
+            ref = cref[q]
+            k = ref >> 1
+            s = 2.0 * (ref & 1) - 1.0
+            sx += s * cfx[k]
+            sy += s * cfy[k]
+            sm += cmom[ref]
+        if has_walls:
+            sx += wfx[p]
+            sy += wfy[p]
+            sm += wfm[p]
+        fx[p] = sx
+        fy[p] = sy
+        fm[p] = sm
+
+
 @njit(parallel=True)
 def run_steps(nsteps, step0, dt, alpha, nchunks, skin, step_lim, overlap_lim, t, servo_alpha,
               pf, fix, bi, bj, bstate, bf, bmom, bptr, bref, npb, ci, cj, cf, cmom, cptr, cref,
@@ -108,7 +139,8 @@ def run_steps(nsteps, step0, dt, alpha, nchunks, skin, step_lim, overlap_lim, t,
     Each step: (1) particle pass: gather the pair forces F^n, local damping with v^{n-1/2},
     v^{n+1/2} and x^{n+1}; (2) wall motion (servo from the wall forces F^n); (3) force passes
     at x^{n+1} with increments Δδ = V^{n+1/2} Δt: parallel bonds, smooth joints, contacts,
-    walls. After a call the stored forces belong to the current positions.
+    walls. After a call the stored pair forces and the particle sums fx, fy, fm belong to the
+    current positions.
 
     Parameters
     ----------
@@ -252,19 +284,30 @@ def run_steps(nsteps, step0, dt, alpha, nchunks, skin, step_lim, overlap_lim, t,
             info[1] = 4.0
             info[2] = qworst
             return s + 1, 2
+        status = 0
         if moving:
             maxd = np.sqrt(maxd2)
             info[5] = maxd
             if maxd > half:
-                return s + 1, 1
-            if has_walls:
+                status = 1
+            elif has_walls:
                 wmax = 0.0
                 for k in range(nw):
                     if wf[k, W_DISP] > wmax:
                         wmax = wf[k, W_DISP]
                 if maxd + wmax > skin:
-                    return s + 1, 1
+                    status = 1
         s += 1
+        if status == 1 or s >= nsteps:
+            # leave fx, fy, fm = F at the current positions (read by energies, group forces)
+            for c in prange(nchunks):
+                lo = (n * c) // nchunks
+                hi = (n * (c + 1)) // nchunks
+                gather_range(lo, hi, has_walls, pf[FX], pf[FY], pf[FM], pf[WFX], pf[WFY],
+                             pf[WFM], bptr, bref, bf[BFX], bf[BFY], bmom, cptr, cref, cf[C_FX],
+                             cf[C_FY], cmom)
+            if status == 1:
+                return s, 1
     return nsteps, 0
 
 

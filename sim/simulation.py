@@ -19,7 +19,7 @@ from .contacts.parallel_bond import pb_constants
 from .cracks import CrackLog, crack_records
 from .errors import InputError
 from .integrate import critical_timestep, run_steps
-from .measure import energies, unbalanced_ratio
+from .measure import energies, unbalanced_ratio, virial_stress
 from .neighbors import build_contacts, build_gather, partner_csr
 from .specimen import Specimen
 from .state import (ARI, BRK_NX, BRK_NY, BRK_STEP, BRK_X, BRK_Y, C_CN, C_CS, C_FS, C_KN, C_KS,
@@ -240,12 +240,14 @@ class Simulation:
         st.wf[:, W_DISP] = 0.0
         pf[X0] = pf[X]
         pf[Y0] = pf[Y]
-        self._refresh = True  # contact/wall forces are re-evaluated before the next step
         self._update_timestep()
         if self.dashpot != (0.0, 0.0):
             m = pf[MASS]
             cf[C_CN, :nc], cf[C_CS, :nc] = dashpot_coefficients(
                 m[i], m[j], cf[C_KN, :nc], cf[C_KS, :nc], self.dashpot[0], self.dashpot[1])
+        # contact and wall forces at the current positions (shear history carried over)
+        self._refresh = True
+        self._run(0)
 
     def _update_timestep(self) -> None:
         st = self.state
@@ -320,7 +322,7 @@ class Simulation:
         info = self._info
         left = n
         use_dash = self.dashpot != (0.0, 0.0)
-        while left > 0:
+        while left > 0 or self._refresh:
             info[:] = 0.0
             step0, time0, dt = self.step, self.time, self.dt
             done, status = run_steps(
@@ -387,7 +389,7 @@ class Simulation:
     def energy(self) -> dict:
         """Energies, J: ``kinetic, strain_bond, strain_contact, strain_wall, damping`` (work
         dissipated by local damping since the start, positive) and ``total`` (kinetic + strain)."""
-        e = energies(self.state, self.dt)
+        e = energies(self.state, self.dt, self.damping)
         e["damping"] = -self.damping_work
         e["total"] = e["kinetic"] + e["strain_bond"] + e["strain_contact"] + e["strain_wall"]
         return e
@@ -409,15 +411,16 @@ class Simulation:
                      w: float | None = None) -> None:
         """Prescribe the velocity of particles ``idx`` (index array or boolean mask).
 
-        Each of ``vx, vy`` (m/s) and ``w`` (rad/s) that is not None is held; a None component
-        stays free (e.g. ``vx=None, vy=0`` is a roller). The reaction on the group is
-        :meth:`group_force`.
+        Each of ``vx, vy`` (m/s) and ``w`` (rad/s) that is not None is held (a scalar or one
+        value per particle); a None component stays free (``vx=None, vy=0`` is a roller).
+        The reaction on the group is :meth:`group_force`.
         """
         p = self._idx(idx)
         st = self.state
         for comp, flag, frow, vrow in ((vx, FIX_X, FVX, VX), (vy, FIX_Y, FVY, VY),
                                        (w, FIX_ROTATION, FW, W)):
             if comp is not None:
+                comp = np.broadcast_to(np.asarray(comp, float), p.shape)
                 st.fix[p] |= flag
                 st.pf[frow, p] = comp
                 st.pf[vrow, p] = comp
@@ -432,6 +435,18 @@ class Simulation:
         self.state.pf[VX, p] = vx
         self.state.pf[VY, p] = vy
         self.state.pf[W, p] = w
+
+    def stress(self, idx, area: float) -> np.ndarray:
+        """Mean stress (virial) of particles ``idx`` over ``area`` (m²), Pa, compression positive.
+
+        Returns
+        -------
+        sigma : (2, 2) ndarray
+            Symmetric; see :func:`sim.measure.virial_stress`.
+        """
+        mask = np.zeros(self.state.n, bool)
+        mask[self._idx(idx)] = True
+        return virial_stress(self.state, mask, area)
 
     def group_force(self, idx) -> tuple:
         """(fx, fy), N: sum of the contact forces acting on particles ``idx`` in the last step,
