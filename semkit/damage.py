@@ -20,7 +20,7 @@ import pandas as pd
 from .errors import InputError
 from .indices import damage_ratio
 
-__all__ = ["p_status", "image_damage", "flag_outliers", "damage_table", "plot_p_by_stage",
+__all__ = ["p_status", "image_damage", "typed_areas", "flag_outliers", "damage_table", "plot_p_by_stage",
            "STAGE_ORDER", "OUTLIER_Z", "OUTLIER_MIN_N"]
 
 #: Order of the loading stages on the P-by-stage plot and in ``damage.csv``.
@@ -29,6 +29,10 @@ STAGE_ORDER = ("pre-test", "initiating", "propagation", "failure")
 OUTLIER_Z = 3.5
 #: Fewest finite P values in a test for the outlier rule to apply.
 OUTLIER_MIN_N = 5
+#: band (px) around the crack objects over which partial-volume darkness is summed.
+PV_BAND_PX = 2
+#: Gaussian sigma (px) of the local-background estimate for the partial-volume area.
+PV_BACKGROUND_SIGMA_PX = 4.0
 #: ``mixed`` crack handling in A_T / A_S.
 MIXED_MODES = ("exclude", "split", "tensile", "shear")
 
@@ -65,6 +69,8 @@ def image_damage(cracks, *, mixed="exclude"):
     ----------
     cracks : pandas.DataFrame
         Columns ``image, area_um2, type_post`` (optional ``tensile_fraction`` in [0, 1]).
+        When ``frac_tensile, frac_shear, frac_mixed`` are present (per-pixel typing by
+        :func:`semkit.classify.classify_post`), each crack's area is split by them.
     mixed : {"exclude", "split", "tensile", "shear"}
         How a mixed crack's area counts (module docstring). ``split`` uses
         ``tensile_fraction`` (0.5 where it is missing).
@@ -96,9 +102,18 @@ def image_damage(cracks, *, mixed="exclude"):
     else:
         ft = np.full(len(c), 0.5)
     ft_mixed = {"exclude": 0.0, "tensile": 1.0, "shear": 0.0}
-    is_m = kind == "mixed"
-    a_t = np.where(kind == "tensile", area, 0.0)
-    a_s = np.where(kind == "shear", area, 0.0)
+    if {"frac_tensile", "frac_shear", "frac_mixed"} <= set(c.columns):
+        # per-pixel typing (classify_post): an object may hold a tensile and a shear crack
+        f_t, f_s, f_m = (np.nan_to_num(c[k].to_numpy(float))
+                         for k in ("frac_tensile", "frac_shear", "frac_mixed"))
+    else:
+        f_t = (kind == "tensile").astype(float)
+        f_s = (kind == "shear").astype(float)
+        f_m = (kind == "mixed").astype(float)
+    is_m = f_m > 0
+    a_t = area * f_t
+    a_s = area * f_s
+    area = area * f_m  # the mixed part below
     if mixed == "split":
         a_t = a_t + np.where(is_m, area * ft, 0.0)
         a_s = a_s + np.where(is_m, area * (1.0 - ft), 0.0)
@@ -106,11 +121,78 @@ def image_damage(cracks, *, mixed="exclude"):
         a_t = a_t + np.where(is_m, area * ft_mixed[mixed], 0.0)
         a_s = a_s + np.where(is_m, area * (1.0 - ft_mixed[mixed]), 0.0)
     df = pd.DataFrame({"image": c["image"].to_numpy(), "area_T_um2": a_t, "area_S_um2": a_s,
-                       "area_mixed_um2": np.where(is_m, area, 0.0)})
+                       "area_mixed_um2": area})
     out = df.groupby("image", sort=False, as_index=False).sum()
     out["P"] = damage_ratio(out["area_T_um2"].to_numpy(), out["area_S_um2"].to_numpy())
     out["P_status"] = p_status(out["area_T_um2"], out["area_S_um2"])
     return out
+
+
+def typed_areas(image, crack_labels, type_image=None, *, core=None, band_px=PV_BAND_PX,
+                background_sigma_px=PV_BACKGROUND_SIGMA_PX):
+    """Partial-volume crack areas per object, split by post-test type.
+
+    Thin cracks (1-2 px, typical of shear) lose about half their area to any pixel threshold
+    once blurred; the partial-volume area sums each pixel's darkness fraction instead, which
+    is unbiased for thin and wide cracks alike.
+
+    Parameters
+    ----------
+    image : (M, N) ndarray
+        Grey image, cracks dark (flattened if the lighting is uneven).
+    crack_labels : (M, N) ndarray of int
+        Crack objects 1..n.
+    type_image : (M, N) ndarray of int, optional
+        Type per pixel (1 tensile, 2 shear, 3 mixed; :func:`semkit.classify.classify_post`).
+    core : float, optional
+        Grey level of a fully dark crack pixel; default the 2nd percentile inside the objects.
+    band_px : int
+        Pixels within this distance of an object count (blur spreads darkness beyond it).
+    background_sigma_px : float
+        Scale of the local background (normalised convolution over non-crack pixels).
+
+    Returns
+    -------
+    table : pandas.DataFrame
+        ``crack_id, area_pv_px, area_T_px, area_S_px, area_M_px``.
+
+    Notes
+    -----
+    f = clip((B - I) / (B - I_core), 0, 1) with B the local background; area = sum f over the
+    object and its band (band pixels belong to the nearest object and take its pixel type).
+    """
+    img = np.asarray(image, dtype=np.float64)
+    lab = np.asarray(crack_labels)
+    if img.shape != lab.shape or img.ndim != 2:
+        raise InputError(f"crack_labels: expected shape {img.shape}, got {lab.shape}")
+    from scipy import ndimage as ndi
+    n = int(lab.max())
+    cols = ["crack_id", "area_pv_px", "area_T_px", "area_S_px", "area_M_px"]
+    if n == 0:
+        return pd.DataFrame(columns=cols)
+    obj = lab > 0
+    dist, (ir, ic) = ndi.distance_transform_edt(~obj, return_indices=True)
+    region = dist <= band_px
+    bg_mask = dist > band_px + 1
+    num = ndi.gaussian_filter(np.where(bg_mask, img, 0.0), background_sigma_px)
+    den = ndi.gaussian_filter(bg_mask.astype(np.float64), background_sigma_px)
+    bg = np.where(den > 1e-3, num / np.maximum(den, 1e-3), np.median(img[bg_mask])
+                  if bg_mask.any() else img.max())
+    core = float(np.percentile(img[obj], 2)) if core is None else float(core)
+    f = np.clip((bg - img) / np.maximum(bg - core, 1e-6), 0.0, 1.0)
+    f[~region] = 0.0
+    owner = lab[ir, ic]
+    types = np.zeros(lab.shape, np.int64) if type_image is None else \
+        np.asarray(type_image).astype(np.int64)[ir, ic]
+    out = {"crack_id": np.arange(1, n + 1),
+           "area_pv_px": np.bincount(owner.ravel(), f.ravel(), minlength=n + 1)[1:]}
+    for k, name in ((1, "area_T_px"), (2, "area_S_px"), (3, "area_M_px")):
+        w = np.where(types == k, f, 0.0)
+        out[name] = np.bincount(owner.ravel(), w.ravel(), minlength=n + 1)[1:]
+    t = pd.DataFrame(out)
+    present = np.zeros(n + 1, bool)
+    present[lab[obj]] = True
+    return t[present[1:]].reset_index(drop=True)
 
 
 def flag_outliers(values, *, z=OUTLIER_Z, min_n=OUTLIER_MIN_N):
