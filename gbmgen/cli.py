@@ -10,6 +10,8 @@ import os
 import sys
 import time
 
+from sim.errors import InputError as SimInputError
+
 from . import __version__, config
 from .errors import InputError
 
@@ -130,7 +132,8 @@ def _summary(spec):
     return out
 
 
-def _print_summary(spec, out=sys.stdout):
+def _print_summary(spec, out=None):
+    out = sys.stdout if out is None else out
     s = _summary(spec)
     fid = (spec.meta or {}).get("fidelity", {})
     print(f"particles {s['particles']}  grains {s['grains']}  parallel bonds "
@@ -236,7 +239,7 @@ def main(argv=None) -> int:
                 for p in export_vtk(spec, a.vtk):
                     print(f"wrote {p}")
             return 0
-    except InputError as exc:
+    except (InputError, SimInputError) as exc:
         print(f"gbmgen: error: {exc}", file=sys.stderr)
         return 2
     return 0

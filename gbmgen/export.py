@@ -20,9 +20,10 @@ EDGES are the distinct boundary segments (for a DFN / smooth-joint install, App.
 line is one grain, its nodes counter-clockwise, with the mineral as group in slot ``mineral``.
 Lines starting with ``;`` are comments. :func:`read_geom` reads this back.
 
-VTK: ``<prefix>_particles.vtk`` (POLYDATA vertices with point data radius, mineral, grain) and
-``<prefix>_grains.vtk`` (POLYDATA polygons with cell data mineral, grain_class, grain), legacy
-ASCII, readable by ParaView and meshio.
+VTK: ``<prefix>_particles.vtk`` (vertex cells with point data radius, mineral, grain) and
+``<prefix>_grains.vtk`` (polygon cells with cell data mineral, grain_class, grain), legacy ASCII
+UNSTRUCTURED_GRID, readable by ParaView and meshio (in ParaView, show the particles with the
+"Point Gaussian" representation scaled by ``radius``).
 """
 from __future__ import annotations
 
@@ -185,7 +186,7 @@ def read_geom(path):
 
 
 def export_vtk(spec, prefix):
-    """Write ``<prefix>_particles.vtk`` and ``<prefix>_grains.vtk`` (legacy ASCII POLYDATA).
+    """Write ``<prefix>_particles.vtk`` and ``<prefix>_grains.vtk`` (legacy ASCII).
 
     Returns
     -------
@@ -193,11 +194,13 @@ def export_vtk(spec, prefix):
     """
     prefix = os.fspath(prefix)
     n = spec.n_particles
-    p = [f"# vtk DataFile Version 3.0", f"gbmgen {__version__} particles (m)", "ASCII",
-         "DATASET POLYDATA", f"POINTS {n} double"]
+    p = ["# vtk DataFile Version 3.0", f"gbmgen {__version__} particles (m)", "ASCII",
+         "DATASET UNSTRUCTURED_GRID", f"POINTS {n} double"]
     p += [f"{x!r} {y!r} 0.0" for x, y in zip(spec.x.tolist(), spec.y.tolist())]
-    p.append(f"VERTICES {n} {2 * n}")
+    p.append(f"CELLS {n} {2 * n}")
     p += [f"1 {i}" for i in range(n)]
+    p.append(f"CELL_TYPES {n}")
+    p += ["1"] * n  # VTK_VERTEX
     p += [f"POINT_DATA {n}", "SCALARS radius double 1", "LOOKUP_TABLE default"]
     p += [repr(v) for v in spec.r.tolist()]
     for key in ("mineral", "grain"):
@@ -208,12 +211,15 @@ def export_vtk(spec, prefix):
     if spec.n_grains:
         xy, off = spec.grain_xy, spec.grain_offsets
         g = spec.n_grains
-        q = [f"# vtk DataFile Version 3.0", f"gbmgen {__version__} grains (m)", "ASCII",
-             "DATASET POLYDATA", f"POINTS {xy.shape[0]} double"]
+        q = ["# vtk DataFile Version 3.0", f"gbmgen {__version__} grains (m)", "ASCII",
+             "DATASET UNSTRUCTURED_GRID", f"POINTS {xy.shape[0]} double"]
         q += [f"{x!r} {y!r} 0.0" for x, y in xy.tolist()]
-        q.append(f"POLYGONS {g} {xy.shape[0] + g}")
+        q.append(f"CELLS {g} {xy.shape[0] + g}")
         for k in range(g):
-            q.append(" ".join([str(off[k + 1] - off[k])] + [str(v) for v in range(off[k], off[k + 1])]))
+            q.append(" ".join([str(off[k + 1] - off[k])]
+                              + [str(v) for v in range(off[k], off[k + 1])]))
+        q.append(f"CELL_TYPES {g}")
+        q += ["7"] * g  # VTK_POLYGON
         q += [f"CELL_DATA {g}", "SCALARS mineral int 1", "LOOKUP_TABLE default"]
         q += [str(v) for v in spec.grain_mineral.tolist()]
         q += ["SCALARS grain_class int 1", "LOOKUP_TABLE default"]
