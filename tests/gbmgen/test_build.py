@@ -50,7 +50,7 @@ def test_packing_porosity_radius_range_overlap():
     assert abs(fabric[0, 0] - 0.5) < 0.05 and abs(fabric[0, 1]) < 0.05
 
 
-def test_same_seed_same_specimen_other_seed_other_layout():
+def test_same_seed_same_specimen_other_seed_other_layout(tmp_path):
     a = small_specimen(7)
     t = read_table(table_4_1_path())
     b, _ = build_specimen(t, width_mm=5.0, height_mm=10.0, scenario=1, seed=7)
@@ -58,6 +58,9 @@ def test_same_seed_same_specimen_other_seed_other_layout():
               "grain_xy", "grain_mineral"):
         assert np.array_equal(getattr(a, k), getattr(b, k), equal_nan=True), k
     assert a.meta == b.meta
+    a.save(tmp_path / "a.npz")
+    b.save(tmp_path / "b.npz")
+    assert (tmp_path / "a.npz").read_bytes() == (tmp_path / "b.npz").read_bytes()
     c = small_specimen(8)
     assert not np.array_equal(a.grain_mineral, c.grain_mineral[:a.n_grains]) \
         or a.n_grains != c.n_grains
