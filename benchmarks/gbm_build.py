@@ -87,7 +87,8 @@ def main(argv=None):
     lines += [f"| {k} | {v:.2f} |" for k, v in timing.items()]
     lines += [f"| **total** | **{total:.2f}** |", "",
               f"{spec.n_particles} particles, {spec.n_grains} grains, "
-              f"{result['parallel_bonds']} parallel bonds, {result['smooth_joints']} smooth joints; "
+              f"{result['parallel_bonds']} parallel bonds, "
+              f"{result['smooth_joints']} smooth joints; "
               f"{result['particles_per_s']:.0f} particles/s; max overlap "
               f"{result['max_overlap']:.3f} r; porosity {result['porosity']:.3f}", "",
               "| S1, same seeds | " + " | ".join(variants["voronoi"]["ks"]) + " | MHI |",

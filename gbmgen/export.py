@@ -116,8 +116,8 @@ def export_geom(spec, path, *, name="specimen"):
 
 
 _NODE = re.compile(r"^\s*(\d+)\s+\(\s*([^,]+),\s*([^,]+),\s*([^)]+)\)")
-_POLY = re.compile(r"^\s*(\d+)\s+NODE\s+([\d\s]+?)(?:\s+GROUP\s+'([^']*)'(?:\s+SLOT\s+'([^']*)')?)?\s*$",
-                   re.IGNORECASE)
+_POLY = re.compile(r"^\s*(\d+)\s+NODE\s+([\d\s]+?)"
+                   r"(?:\s+GROUP\s+'([^']*)'(?:\s+SLOT\s+'([^']*)')?)?\s*$", re.IGNORECASE)
 
 
 def read_geom(path):

@@ -186,7 +186,8 @@ class GrainSizeTable:
             for c in range(3):
                 f = self.frequencies[k, c]
                 if f > 0 and cum + f >= q:
-                    out[k] = self.lo_um[k, c] + (q - cum) / f * (self.hi_um[k, c] - self.lo_um[k, c])
+                    lo, hi = self.lo_um[k, c], self.hi_um[k, c]
+                    out[k] = lo + (q - cum) / f * (hi - lo)
                     break
                 cum += f
         return out

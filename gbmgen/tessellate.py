@@ -249,7 +249,8 @@ def fit_power_weights(sx, sy, box, target_area, *, weights, n_iter=30, rtol=0.01
         Wanted cell areas (their sum is scaled to the box area).
     weights : (S,) ndarray of float64, m^2
         Starting weights (seed radius squared: for non-overlapping seed disks every cell is
-        then non-empty, which the method needs).
+        then non-empty, which the method needs; if a cell is empty the weights are halved
+        towards Voronoi, w = 0, until none is).
     n_iter : int
         Newton-step limit.
     rtol : float
@@ -280,10 +281,18 @@ def fit_power_weights(sx, sy, box, target_area, *, weights, n_iter=30, rtol=0.01
     w = np.array(weights, dtype=float)
     n = sx.size
     a, geo = _areas(sx, sy, box, w)
+    lam = 1.0
+    while np.any(a <= 0) and lam > 1e-3:  # empty cells (overlapping seed disks): shrink the
+        lam *= 0.5                         # weights towards Voronoi (w = 0, every cell live)
+        a, geo = _areas(sx, sy, box, lam * w)
+    if np.any(a <= 0):
+        lam = 0.0
+        a, geo = _areas(sx, sy, box, 0.0 * w)
+    w = lam * w
     err = float(np.max(np.abs(a - t) / t))
     it = 0
     for it in range(1, n_iter + 1):
-        if err <= rtol:
+        if err <= rtol or np.any(a <= 0):
             it -= 1
             break
         H = _hessian(sx, sy, *geo, n)
@@ -293,11 +302,15 @@ def fit_power_weights(sx, sy, box, target_area, *, weights, n_iter=30, rtol=0.01
         g0 = float(np.linalg.norm(t - a))
         floor = 0.5 * np.minimum(a, t)
         tau = 1.0
+        accepted = False
         while tau > 1e-4:
             a2, geo2 = _areas(sx, sy, box, w + tau * dw)
             if np.all(a2 >= floor) and np.linalg.norm(t - a2) <= (1.0 - 0.5 * tau) * g0:
+                accepted = True
                 break
             tau *= 0.5
+        if not accepted:
+            break
         w = w + tau * dw
         a, geo = a2, geo2
         err = float(np.max(np.abs(a - t) / t))

@@ -1,4 +1,4 @@
-"""Overlap relaxation of a 2D disk packing inside a rectangle (the packing step of ``ball distribute``).
+"""Overlap relaxation of a 2D disk packing in a rectangle (the packing step of ``ball distribute``).
 
 A disk packing placed at random overlaps heavily. :func:`relax_overlaps` moves the disk centres
 (radii fixed) until the largest overlap is a small fraction of the smaller radius. It is not a

@@ -1,7 +1,7 @@
 """Fixtures of the gbmgen tests."""
 import pytest
-
 from _gbmgen_builds import table_4_1_path
+
 from gbmgen.table import read_table
 
 

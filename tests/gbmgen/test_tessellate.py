@@ -72,3 +72,17 @@ def test_bad_input():
         tessellate([2.0], [0.5], [0, 1, 0, 1])
     with pytest.raises(InputError, match="box"):
         tessellate([0.5], [0.5], [0, 0, 0, 1])
+
+
+def test_fit_power_weights_from_overlapping_disks():
+    # random seeds with strongly overlapping disks: some cells start empty and are revived
+    rng = np.random.default_rng(4)
+    n, box = 300, np.array([0.0, 1.0, 0.0, 1.0])
+    sx, sy = rng.uniform(0.01, 0.99, n), rng.uniform(0.01, 0.99, n)
+    r = rng.uniform(0.01, 0.08, n)
+    xy, off, seed = tessellate(sx, sy, box, weights=r ** 2)
+    assert seed.size < n  # empty cells at the start
+    w, info = fit_power_weights(sx, sy, box, np.pi * r ** 2, weights=r ** 2, rtol=0.01)
+    xy, off, seed = tessellate(sx, sy, box, weights=w)
+    assert seed.size == n
+    assert info["max_rel_error"] <= 0.01
