@@ -45,6 +45,11 @@ SMALL_OBJECT_PX = 40
 SHORT_BRANCH_PX = 12
 #: branches meeting at a junction within this angle of a straight continuation are one trace.
 CONTINUE_DEG = 35.0
+#: branch ends closer than this (px) meet at one junction.
+JUNCTION_PX = 4.0
+#: branch ends of different objects up to this far apart (px), facing each other within
+#: CONTINUE_DEG, continue one trace across the gap (a crack broken by the threshold).
+GAP_PX = 8.0
 #: feature names, in model order.
 FEATURE_NAMES = ("log_aperture", "aperture_cv", "dark_density", "skeleton_density",
                  "endpoint_density", "excess_dark")
@@ -300,19 +305,31 @@ def _traces(skel, p, *, short_px, angle_deg):
             nd = np.hypot(*d)
             if nd > 0:
                 ends.append((i, e.astype(float), d / nd))
-    cos_lim = -np.cos(np.radians(angle_deg))
-    for a_ in range(len(ends)):
-        i, ea, da = ends[a_]
-        best, best_c = None, cos_lim
-        for b_ in range(len(ends)):
-            j, eb, db = ends[b_]
-            if j == i or np.hypot(*(ea - eb)) > 4.0:
+    if len(ends) > 1:
+        from scipy.spatial import cKDTree
+        pts = np.array([e[1] for e in ends])
+        dirs = np.array([e[2] for e in ends])
+        owner = np.array([e[0] for e in ends])
+        cos_lim = np.cos(np.radians(angle_deg))
+        best = {}
+        for a_, b_ in cKDTree(pts).query_pairs(GAP_PX):
+            if owner[a_] == owner[b_]:
                 continue
-            c = float(da @ db)
-            if c < best_c:
-                best, best_c = j, c
-        if best is not None:
-            parent[find(i)] = find(best)
+            c = -float(dirs[a_] @ dirs[b_])  # 1 = perfectly continuing
+            if c < cos_lim:
+                continue
+            v = pts[b_] - pts[a_]
+            dv = np.hypot(*v)
+            if dv > JUNCTION_PX:  # across a gap: the gap must lie along both branches
+                v = v / dv
+                if -float(dirs[a_] @ v) < cos_lim or float(dirs[b_] @ v) < cos_lim:
+                    continue
+            for x, y in ((a_, b_), (b_, a_)):
+                if c > best.get(x, (-2.0, -1))[0]:
+                    best[x] = (c, y)
+        for x, (c, y) in best.items():
+            if best.get(y, (None, -1))[1] == x:  # mutual best partners only
+                parent[find(owner[x])] = find(owner[y])
     trace = np.array([find(i) for i in range(n)])
     return coords, trace, short
 
@@ -668,3 +685,104 @@ def apply_labels(cracks, labels):
                             ("mixed", "frac_mixed")):
                 out.loc[i, c] = 1.0 if t == name else 0.0
     return out
+
+
+# ----------------------------------------------------------------------------- pipeline stage
+_POST_COLUMNS = ("frac_tensile", "frac_shear", "frac_mixed", "tensile_fraction",
+                 "aperture_mean_px", "aperture_cv", "dark_density", "skeleton_density",
+                 "endpoint_density", "excess_dark")
+
+
+def classify_stage(cracks, crack_labels, *, grey=None, pixel_size_um=1.0, model=None,
+                   post=True, grain_labels=None):
+    """Add crack types, confidences, features and partial-volume areas to ``cracks.csv`` rows.
+
+    Parameters
+    ----------
+    cracks : pandas.DataFrame
+        Rows of one image (``crack_id`` matches ``crack_labels``).
+    crack_labels : (M, N) ndarray of int
+    grey : (M, N) ndarray, optional
+        Flattened, denoised grey image: gives ``area_pv_um2`` (partial-volume area), which
+        :func:`semkit.damage.image_damage` uses for A_T and A_S.
+    pixel_size_um : float
+    model : dict, optional
+        Post-test model (default :data:`DEFAULT_POST_MODEL`).
+    post : bool
+        Classify tensile/shear/mixed (False for pre-test images: ``type_post`` "unknown").
+    grain_labels : (M, N) ndarray of int, optional
+        Grain map: classify inter/intra/trans (``type_pre``).
+
+    Returns
+    -------
+    cracks : pandas.DataFrame
+        Copy with ``type_pre, type_post, confidence`` (post-test confidence, or the pre-existing
+        one when only that was classified), ``confidence_pre``, the post features,
+        ``frac_tensile, frac_shear, frac_mixed`` and ``area_pv_um2``.
+    """
+    from .damage import typed_areas
+    out = cracks.copy()
+    lab = np.asarray(crack_labels)
+    ids = out["crack_id"].to_numpy() if len(out) else np.zeros(0, int)
+    if grey is not None and len(out):
+        a = typed_areas(grey, lab).set_index("crack_id")
+        out["area_pv_um2"] = a["area_pv_px"].reindex(ids).to_numpy() * pixel_size_um ** 2
+    if grain_labels is not None and len(out):
+        t, _ = classify_pre(lab, grain_labels)
+        t = t.set_index("crack_id").reindex(ids)
+        out["type_pre"] = t["type_pre"].fillna("unknown").to_numpy()
+        out["confidence_pre"] = t["confidence"].to_numpy()
+        out["confidence"] = out["confidence_pre"]
+    if post and len(out):
+        t, _ = classify_post(lab, model=model)
+        t = t.set_index("crack_id").reindex(ids)
+        out["type_post"] = t["type_post"].fillna("unknown").to_numpy()
+        out["confidence"] = t["confidence"].to_numpy()
+        for c in _POST_COLUMNS:
+            out[c] = t[c].to_numpy()
+    elif len(out):
+        out["type_post"] = "unknown"
+    return out
+
+
+def train_from_folder(folder, labels, *, pixel_size_um=None, seed=None, **options):
+    """Fit a post-test model from ``labels.csv`` rows referring to a ``semkit analyse`` run.
+
+    The images named in ``labels`` are re-analysed with the same pipeline options (crack ids
+    are deterministic), and :func:`train_post` fits the model on the labelled cracks.
+
+    Parameters
+    ----------
+    folder : path
+        The images (with ``manifest.csv`` if the analysis had one).
+    labels : pandas.DataFrame
+        ``image, crack_id, type`` (post-test types are used).
+    pixel_size_um : float, optional
+    seed : int, optional
+    **options
+        Pipeline options (:class:`semkit.pipeline.AnalysisOptions` fields).
+
+    Returns
+    -------
+    model : dict
+    """
+    import pathlib
+
+    from .io import load_image, read_manifest
+    from .pipeline import CrackAnalysis, AnalysisOptions
+    folder = pathlib.Path(folder)
+    post = labels[labels["type"].astype(str).isin(["tensile", "shear", "mixed"])]
+    if post.empty:
+        raise InputError("labels: no tensile/shear/mixed rows to train on")
+    man = read_manifest(folder)
+    mrows = {} if man is None else {str(r["image"]): r for r in man.to_dict("records")}
+    opts = AnalysisOptions(**options)
+    samples = []
+    for name, g in post.groupby("image"):
+        path = folder / str(name)
+        if not path.is_file():
+            raise InputError(f"labels: image {name!r} not found in {folder}")
+        li = load_image(path, manifest_row=mrows.get(str(name)), pixel_size_um=pixel_size_um)
+        a = CrackAnalysis(li.image, pixel_size_um=li.pixel_size_um, name=str(name), options=opts)
+        samples.append((a.crack_labels, dict(zip(g["crack_id"].astype(int), g["type"]))))
+    return train_post(samples, seed=seed)
