@@ -16,7 +16,9 @@ __all__ = ["main", "build_parser"]
 #: keys a --config YAML file may set (the API keywords of analyse_folder)
 _ANALYSE_KEYS = ("threshold", "flatten", "denoise_sigma_px", "despeckle", "min_area_um2",
                  "max_hole_px", "length", "exclude_pores", "pixel_size_um", "jobs", "progress",
-                 "overlays")
+                 "overlays",
+                 # --- issue #3 ---
+                 "classify", "crack_model", "grains", "minerals", "classes", "labels")
 
 
 def _version():
@@ -60,6 +62,22 @@ def _add_analyse(sub):
     p.add_argument("--no-progress", dest="progress", action="store_false", default=None,
                    help="no progress bar")
     p.add_argument("--config", metavar="FILE.yaml", help="options from YAML (flags win)")
+    # --- issue #3: crack types, P, grains (docs/semkit_science.md) ---
+    p.add_argument("--no-classify", dest="classify", action="store_false", default=None,
+                   help="skip tensile/shear/mixed typing (then no P)")
+    p.add_argument("--crack-model", default=None, metavar="MODEL.json",
+                   help="post-test crack model from `semkit classify --train` (default built in)")
+    p.add_argument("--labels", default=None, metavar="LABELS.csv",
+                   help="user crack types (image, crack_id, type) overriding the classifier")
+    p.add_argument("--grains", action="store_true", default=None,
+                   help="segment minerals and grains: type_pre, grains.csv, grain maps")
+    p.add_argument("--minerals", default=None, metavar="NAMES",
+                   help="mineral names brightest-first (pyroxene,plagioclase,biotite) or a "
+                        "number of phases (default 3)")
+    p.add_argument("--classes", default=None, metavar="E1,E2",
+                   help="grain-size class edges fine/medium,medium/coarse in µm (default: "
+                        "10th/90th count percentiles per mineral)")
+    # --- end issue #3 ---
     p.set_defaults(run=_run_analyse)
 
 
@@ -77,6 +95,7 @@ def build_parser():
     sub = ap.add_subparsers(dest="command", metavar="COMMAND")
     _add_analyse(sub)
     _add_synth(sub)
+    _add_science(sub)  # issue #3: grains, indices, classify
     return ap
 
 
@@ -108,6 +127,14 @@ def _run_analyse(args):
         kw["max_hole_px"] = None
     if kw.get("jobs") is not None and kw["jobs"] < 1:
         raise InputError(f"--jobs: expected >= 1, got {kw['jobs']}")
+    # --- issue #3 ---
+    if kw.get("labels") is not None:
+        from .classify import read_labels
+        kw["labels"] = read_labels(kw["labels"])
+    if kw.get("classes") is not None:
+        from .grains import _parse_classes
+        _parse_classes(kw["classes"])
+    # --- end issue #3 ---
     images, _ = analyse_folder(args.folder, args.out, **kw)
     failed = images["error"].fillna("").astype(str).str.len() > 0
     n_fail = int(failed.sum())
@@ -117,6 +144,79 @@ def _run_analyse(args):
               f"{first['error']}); see {args.out}/images.csv", file=sys.stderr)
         return 1
     return 0
+
+
+# --- issue #3: semkit grains | indices | classify ------------------------------------------
+def _add_science(sub):
+    p = sub.add_parser("grains", help="grain map and grain-size table (grains.csv) of a folder")
+    p.add_argument("folder", metavar="DIR", help="folder of images (manifest.csv optional)")
+    p.add_argument("--out", required=True, metavar="OUT", help="output folder")
+    p.add_argument("--minerals", default=None, metavar="NAMES",
+                   help="mineral names brightest-first, or a number of phases (default 3)")
+    p.add_argument("--classes", default=None, metavar="E1,E2",
+                   help="class edges in µm (default: 10th/90th percentiles per mineral)")
+    p.add_argument("--pixel-size-um", dest="pixel_size_um", type=float, default=None,
+                   metavar="UM", help="fallback pixel size")
+    p.add_argument("--no-progress", dest="progress", action="store_false", default=True)
+    p.add_argument("--seed", type=int, default=None)
+    p.set_defaults(run=_run_grains)
+    p = sub.add_parser("indices", help="H, MHI and R_a of a grain-size table (grains.csv)")
+    p.add_argument("table", metavar="GRAINS.csv")
+    p.add_argument("--convention", default="N1", choices=["N1", "geometric", "measured"],
+                   help="class-mean convention (default N1; see docs/semkit_science.md)")
+    p.add_argument("--json", action="store_true", help="print JSON")
+    p.set_defaults(run=_run_indices)
+    p = sub.add_parser("classify", help="fit the post-test crack model from user labels")
+    p.add_argument("folder", metavar="DIR", help="the images the labels refer to")
+    p.add_argument("--train", required=True, metavar="LABELS.csv",
+                   help="image, crack_id, type (tensile|shear|mixed)")
+    p.add_argument("--out", default="crack_model.json", metavar="MODEL.json")
+    p.add_argument("--pixel-size-um", dest="pixel_size_um", type=float, default=None)
+    p.add_argument("--seed", type=int, default=None)
+    p.set_defaults(run=_run_classify)
+
+
+def _run_grains(args):
+    from .grains import analyse_grains_folder
+    t = analyse_grains_folder(args.folder, args.out, minerals=args.minerals,
+                              classes=args.classes, pixel_size_um=args.pixel_size_um,
+                              progress=args.progress, seed=args.seed)
+    print(f"wrote grains.csv ({t['mineral'].nunique()} minerals) to {args.out}")
+    return 0
+
+
+def _run_indices(args):
+    import json
+
+    import pandas as pd
+
+    from .indices import indices_from_table
+    try:
+        table = pd.read_csv(args.table)
+    except (OSError, ValueError) as e:
+        raise InputError(f"{args.table}: cannot read grain-size table ({e})") from None
+    try:
+        r = indices_from_table(table, convention=args.convention)
+    except ValueError as e:
+        raise InputError(f"{args.table}: {e}") from None
+    if args.json:
+        print(json.dumps({"H": r["H"], "MHI": r["MHI"], "R_a_mm": r["R_a_mm"],
+                          "R_a_um": r["R_a_um"], "convention": r["convention"],
+                          "mineral_mean_um": r["mineral_mean_um"]}))
+    else:
+        print(f"H = {r['H']:.4f}  MHI = {r['MHI']:.4f}  R_a = {r['R_a_mm']:.4g} mm "
+              f"(convention {r['convention']})")
+    return 0
+
+
+def _run_classify(args):
+    from .classify import read_labels, save_model, train_from_folder
+    model = train_from_folder(args.folder, read_labels(args.train),
+                              pixel_size_um=args.pixel_size_um, seed=args.seed)
+    save_model(model, args.out)
+    print(f"wrote crack model to {args.out} (lo={model['lo']}, hi={model['hi']})")
+    return 0
+# --- end issue #3 ------------------------------------------------------------------------
 
 
 def _run_synth(args):

@@ -73,10 +73,24 @@ class AnalysisOptions:
     length: bool = True
     exclude_pores: bool = True
     bridge_gaps: bool = True
+    # --- issue #3 stages (semkit.classify / grains / damage) ---
+    classify: bool = True           # type_post, confidence, features, area_T/area_S/P
+    crack_model: str | None = None  # JSON model from `semkit classify --train` (default built in)
+    grains: bool = False            # phases, grains, type_pre, grains.csv
+    minerals: str | None = None     # names brightest-first ("a,b,c") or a number of phases
+    # --- end issue #3 ---
 
     def __post_init__(self):
         from .threshold import parse_method
         parse_method(self.threshold)
+        # --- issue #3 ---
+        if self.crack_model is not None:
+            from .classify import load_model
+            load_model(self.crack_model)
+        if self.minerals is not None:
+            from .grains import parse_minerals
+            parse_minerals(self.minerals)
+        # --- end issue #3 ---
         if self.flatten not in ("polynomial", "gaussian", "none"):
             raise InputError(f"flatten: expected polynomial, gaussian or none, got {self.flatten!r}")
         if self.despeckle not in ("specks", "median", "none"):
@@ -323,6 +337,11 @@ def analyse_file(path, *, manifest_row=None, pixel_size_um=None, overlay_dir=Non
                           options=options)
         cracks = a.crack_rows()
         row = a.summary()
+        # --- issue #3: crack types, P, grains (semkit.damage.science_stage) ---
+        from .damage import science_stage
+        cracks, row = science_stage(a, cracks, row, manifest_row=manifest_row,
+                                    overlay_dir=overlay_dir)
+        # --- end issue #3 ---
         row["seconds"] = time.perf_counter() - t0
         if overlay_dir is not None:
             from .plot import overlay_cracks
@@ -350,7 +369,7 @@ def _write_tables(out, rows, cracks, order):
 
 
 def analyse_folder(folder, out, *, jobs=None, progress=True, overlays=True, pixel_size_um=None,
-                   **options):
+                   labels=None, classes=None, **options):
     """Analyse every image of a folder; write ``images.csv``, ``cracks.csv`` and overlays.
 
     Parameters
@@ -368,6 +387,11 @@ def analyse_folder(folder, out, *, jobs=None, progress=True, overlays=True, pixe
     pixel_size_um : float, optional
         Fallback pixel size (source ``cli``) when neither the manifest, the TIFF metadata nor
         the magnification gives one.
+    labels : pandas.DataFrame, optional
+        User crack labels ``image, crack_id, type`` (issue #3): they override the classified
+        types, and P is recomputed.
+    classes : str, optional
+        Grain-size class edges for ``grains.csv`` (``"20,140"``, um; issue #3).
     **options
         Fields of :class:`AnalysisOptions`.
 
@@ -433,5 +457,14 @@ def analyse_folder(folder, out, *, jobs=None, progress=True, overlays=True, pixe
     finally:
         if bar:
             bar.close()
+        # --- issue #3: per-image grain tables travel in cracks.attrs ---
+        grain_tables = [cracks[k].attrs.get("grains") for k in order
+                        if cracks.get(k) is not None]
+        # --- end issue #3 ---
         images, cr = _write_tables(out, rows, cracks, order)
+    # --- issue #3: labels, damage.csv, P_by_stage.png, grains.csv ---
+    from .damage import write_science_outputs
+    images, cr = write_science_outputs(out, images, cr, manifest=man, labels=labels,
+                                       grain_tables=grain_tables, classes=classes)
+    # --- end issue #3 ---
     return images, cr
