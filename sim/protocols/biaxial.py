@@ -34,7 +34,8 @@ def _wall_stress(sim, k, axis, length):
 
 
 def run_biaxial(specimen, *, confinement: float = DEFAULT_CONFINEMENT,
-                strain_rate: float = ld.DEFAULT_STRAIN_RATE,
+                strain_rate: float | None = None,
+                platen_velocity: float = ld.DEFAULT_PLATEN_VELOCITY,
                 post_peak: float | None = ld.DEFAULT_POST_PEAK, max_strain: float | None = None,
                 damping: float = 0.7, timestep_factor: float | None = None,
                 record_strain: float = ld.RECORD_STRAIN, ramp_records: int = 5,
@@ -53,8 +54,9 @@ def run_biaxial(specimen, *, confinement: float = DEFAULT_CONFINEMENT,
         Relative tolerance of every wall stress at the end of stage 1.
     consolidation_steps : int
         Step limit of stage 1 (a warning goes into the summary if it is reached).
-    strain_rate, post_peak, max_strain, damping, timestep_factor, record_strain, ramp_records,
-    limit_strain, out, progress, figures, checkpoint_every, sim_options :
+    strain_rate, platen_velocity, post_peak, max_strain, damping, timestep_factor,
+    record_strain, ramp_records, limit_strain, out, progress, figures, checkpoint_every,
+    sim_options :
         As in :func:`sim.protocols.ucs.run_ucs`.
 
     Returns
@@ -63,10 +65,9 @@ def run_biaxial(specimen, *, confinement: float = DEFAULT_CONFINEMENT,
     """
     if not (confinement > 0 and math.isfinite(confinement)):
         raise ValueError(f"'confinement' = {confinement!r}, expected a positive stress (Pa)")
-    if not (strain_rate > 0 and math.isfinite(strain_rate)):
-        raise ValueError(f"'strain_rate' = {strain_rate!r}, expected a positive number (1/s)")
-    stop = ld.StopRule(post_peak=post_peak, max_strain=max_strain, min_peak_pa=confinement)
-    specimen.validate("specimen")
+    stop = ld.StopRule(post_peak=post_peak, max_strain=max_strain,
+                       min_peak_pa=max(1e6, confinement))
+    specimen, _ = ld.relieve_overlaps(specimen.validate("specimen"))
     opts = dict(damping=damping, **(sim_options or {}))
     if timestep_factor is not None:
         opts["timestep_factor"] = timestep_factor
@@ -105,7 +106,7 @@ def run_biaxial(specimen, *, confinement: float = DEFAULT_CONFINEMENT,
     sim.clear_servo(bot)
     sim.clear_servo(top)
     h0, w0 = sizes()
-    v = 0.5 * strain_rate * h0
+    strain_rate, v = ld.loading_rate(strain_rate, platen_velocity, h0)
     x0, y0 = np.array(sim.x, copy=True), np.array(sim.y, copy=True)
     cur_box = np.array([np.asarray(sim.wall_position(left))[0],
                         np.asarray(sim.wall_position(right))[0],

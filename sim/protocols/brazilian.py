@@ -106,7 +106,8 @@ def disc_diameter(x, y, r) -> float:
 
 
 def run_brazilian(specimen, *, cut: bool = True, diameter=None,
-                  strain_rate: float = ld.DEFAULT_STRAIN_RATE,
+                  strain_rate: float | None = None,
+                  platen_velocity: float = ld.DEFAULT_PLATEN_VELOCITY,
                   post_peak: float | None = ld.DEFAULT_POST_PEAK, max_strain: float | None = None,
                   damping: float = 0.7, timestep_factor: float | None = None,
                   record_strain: float = 0.25 * ld.RECORD_STRAIN, ramp_records: int = 5,
@@ -124,8 +125,11 @@ def run_brazilian(specimen, *, cut: bool = True, diameter=None,
     cut : bool
     diameter : float, m, optional
         Disc diameter when cutting (default the smaller side).
-    strain_rate : float, 1/s
-        Platen closure rate / D.
+    strain_rate : float, 1/s, optional
+        Loading strain rate; default 2 ``platen_velocity`` / L (L the loaded length).
+    platen_velocity : float, m/s
+        Speed of each platen when ``strain_rate`` is not given (default
+        :data:`sim.protocols.loading.DEFAULT_PLATEN_VELOCITY`).
     loading : {"jaws", "platens"}
         ``jaws``: the rim particles within ±``jaw_half_angle_deg`` of the vertical diameter
         move at prescribed velocity (curved jaws; load = reaction on the groups). ``platens``:
@@ -140,10 +144,9 @@ def run_brazilian(specimen, *, cut: bool = True, diameter=None,
     result : TestResult
         ``summary["tensile_mpa"]`` = 2 P_max / (π D t), ``peak_load_n_per_m``, ``diameter_m``.
     """
-    if not (strain_rate > 0 and math.isfinite(strain_rate)):
-        raise ValueError(f"'strain_rate' = {strain_rate!r}, expected a positive number (1/s)")
     stop = ld.StopRule(post_peak=post_peak, max_strain=max_strain)
     disc = cut_disc(specimen, diameter=diameter) if cut else specimen.validate("specimen")
+    disc, _ = ld.relieve_overlaps(disc)
     d = disc_diameter(disc.x, disc.y, disc.r)
     opts = dict(damping=damping, **(sim_options or {}))
     if timestep_factor is not None:
@@ -161,7 +164,7 @@ def run_brazilian(specimen, *, cut: bool = True, diameter=None,
             return float(sim.y[jt].mean() - sim.y[jb].mean())
         h0 = d
         g0 = jaw_gap()
-    v = 0.5 * strain_rate * h0
+    strain_rate, v = ld.loading_rate(strain_rate, platen_velocity, h0)
     dt = float(sim.dt)
     chunk = max(1, int(round(record_strain / (strain_rate * dt))))
     stop_strain = max_strain if max_strain is not None else limit_strain

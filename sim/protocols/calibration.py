@@ -19,12 +19,12 @@ import time
 from ..calibrate import DEFAULT_TARGETS, calibrate
 from ..errors import InputError
 from .outputs import json_ready, write_json_atomic, write_text_atomic
-from .parameters import apply_parameters, load_parameters, save_parameters, thesis_parameters
+from .parameters import apply_parameters, load_parameters, save_parameters, start_parameters
 
 __all__ = ["make_evaluator", "calibrate_specimens", "report_markdown"]
 
 
-def make_evaluator(specimen, *, strain_rate=None, tension_test="direct", progress=False):
+def make_evaluator(specimen, *, platen_velocity=None, tension_test="direct", progress=False):
     """``evaluate(params) -> {"E", "UCS", "sigma_t"}`` (Pa) on one specimen.
 
     E is the UCS test's tangent modulus at 50 % of the peak (gauge strain), UCS its peak, σt
@@ -35,7 +35,7 @@ def make_evaluator(specimen, *, strain_rate=None, tension_test="direct", progres
     from .ucs import run_ucs
     if tension_test not in ("direct", "brazilian"):
         raise ValueError(f"'tension_test' = {tension_test!r}, expected 'direct' or 'brazilian'")
-    kw = {} if strain_rate is None else {"strain_rate": strain_rate}
+    kw = {} if platen_velocity is None else {"platen_velocity": platen_velocity}
 
     def evaluate(params):
         spec = apply_parameters(specimen, params)
@@ -86,7 +86,7 @@ def report_markdown(result, targets, *, specimens=(), extra="") -> str:
 
 
 def calibrate_specimens(paths, *, out, params=None, targets=None, tol=0.03, accept=0.05,
-                        max_evaluations=10, strain_rate=None, tension_test="direct",
+                        max_evaluations=10, platen_velocity=None, tension_test="direct",
                         progress=True, knobs=None):
     """Calibrate on specimen files and write the parameter file and the report into ``out``.
 
@@ -96,13 +96,14 @@ def calibrate_specimens(paths, *, out, params=None, targets=None, tol=0.03, acce
         ``specimen.npz`` files; the first for the search, all for the seed average.
     out : path
     params : path or dict, optional
-        Starting parameters (default: thesis Ch. 4, :func:`thesis_parameters`).
+        Starting parameters (default: thesis Ch. 4 with a bond-like joint stiffness,
+        :func:`sim.protocols.parameters.start_parameters`).
     targets : dict, optional
         ``{"E", "UCS", "sigma_t"}`` in Pa (default thesis lab 65 GPa, 135 MPa, 18 MPa).
     tol, accept, max_evaluations, knobs :
         See :func:`sim.calibrate.calibrate`.
-    strain_rate : float, optional
-        Loading rate of the tests (1/s).
+    platen_velocity : float, optional
+        Loading speed of the tests, m/s (default: the protocols' default).
     tension_test : {"direct", "brazilian"}
 
     Returns
@@ -113,7 +114,7 @@ def calibrate_specimens(paths, *, out, params=None, targets=None, tol=0.03, acce
     if not paths:
         raise InputError("calibrate: expected at least one specimen file")
     specs = [Specimen.load(p) for p in paths]
-    start = (thesis_parameters() if params is None else
+    start = (start_parameters(specs[0]) if params is None else
              load_parameters(params) if isinstance(params, (str, os.PathLike)) else params)
     for p, s in zip(paths, specs):   # fail early on a name mismatch
         apply_parameters(s, start)
@@ -131,7 +132,7 @@ def calibrate_specimens(paths, *, out, params=None, targets=None, tol=0.03, acce
                   f"{'' if rec['seed'] is None else ' seed ' + str(rec['seed'])}: {errs} "
                   f"({rec['seconds']:.0f} s)", flush=True)
 
-    evals = [make_evaluator(s, strain_rate=strain_rate, tension_test=tension_test)
+    evals = [make_evaluator(s, platen_velocity=platen_velocity, tension_test=tension_test)
              for s in specs]
     t0 = time.perf_counter()
     kw = {} if knobs is None else {"knobs": knobs}
@@ -146,7 +147,7 @@ def calibrate_specimens(paths, *, out, params=None, targets=None, tol=0.03, acce
     save_parameters(os.path.join(out, "calibrated_params.yaml"), res.params, header=header)
     rep = res.to_dict()
     rep.update(targets=targets, specimens=[str(p) for p in paths], wall_s=wall,
-               tension_test=tension_test, strain_rate=strain_rate)
+               tension_test=tension_test, platen_velocity=platen_velocity)
     write_json_atomic(os.path.join(out, "calibration_report.json"), rep)
     write_text_atomic(os.path.join(out, "calibration_report.md"),
                       report_markdown(res, targets, specimens=paths))

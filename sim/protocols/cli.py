@@ -17,14 +17,17 @@ _TESTS = ("ucs", "tension", "brazilian", "biaxial")
 
 
 def _common(p, *, rate=True):
-    from .loading import DEFAULT_POST_PEAK, DEFAULT_STRAIN_RATE
+    from .loading import DEFAULT_PLATEN_VELOCITY, DEFAULT_POST_PEAK
     p.add_argument("specimen", help="specimen.npz (DESIGN.md §4)")
     p.add_argument("--out", required=True, help="results directory")
     p.add_argument("--params", metavar="FILE.yaml",
                    help="micro-parameter file applied to the specimen's minerals by name")
     if rate:
-        p.add_argument("--strain-rate", type=float, default=DEFAULT_STRAIN_RATE,
-                       help=f"loading strain rate, 1/s (default {DEFAULT_STRAIN_RATE})")
+        p.add_argument("--platen-velocity", type=float, default=DEFAULT_PLATEN_VELOCITY,
+                       help="speed of each platen/grip/jaw, m/s "
+                            f"(default {DEFAULT_PLATEN_VELOCITY}, from the convergence study)")
+        p.add_argument("--strain-rate", type=float, default=None,
+                       help="loading strain rate, 1/s (overrides --platen-velocity)")
     p.add_argument("--post-peak", type=float, default=DEFAULT_POST_PEAK,
                    help="stop when the stress falls below this fraction of the peak "
                         f"(default {DEFAULT_POST_PEAK})")
@@ -78,8 +81,8 @@ def register(subparsers):
     p.add_argument("--tol", type=float, default=0.03, help="search tolerance (0.03)")
     p.add_argument("--accept", type=float, default=0.05, help="acceptance of the seed mean")
     p.add_argument("--max-evaluations", type=int, default=10)
-    p.add_argument("--strain-rate", type=float, default=None,
-                   help="loading strain rate, 1/s (default: the protocols' default)")
+    p.add_argument("--platen-velocity", type=float, default=None,
+                   help="loading speed, m/s (default: the protocols' default)")
     p.add_argument("--tension-test", choices=("direct", "brazilian"), default="direct")
     p.add_argument("--no-progress", action="store_true")
     p.set_defaults(func=run_calibrate_command)
@@ -103,7 +106,8 @@ def run_test_command(args) -> int:
     except InputError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
-    kw = dict(strain_rate=args.strain_rate, max_strain=args.max_strain,
+    kw = dict(strain_rate=args.strain_rate, platen_velocity=args.platen_velocity,
+              max_strain=args.max_strain,
               post_peak=None if args.max_strain is not None else args.post_peak,
               damping=args.damping, timestep_factor=args.timestep_factor, out=None,
               progress=not args.no_progress, checkpoint_every=args.checkpoint_every,
@@ -147,7 +151,8 @@ def run_calibrate_command(args) -> int:
         res = calibrate_specimens(args.specimens, out=args.out, params=args.params,
                                   targets=targets, tol=args.tol, accept=args.accept,
                                   max_evaluations=args.max_evaluations,
-                                  strain_rate=args.strain_rate, tension_test=args.tension_test,
+                                  platen_velocity=args.platen_velocity,
+                                  tension_test=args.tension_test,
                                   progress=not args.no_progress)
     except KeyboardInterrupt:
         print(f"interrupted: evaluations so far in {args.out}", file=sys.stderr)

@@ -45,7 +45,8 @@ def _group_fy(sim, idx):
     return float(np.sum(np.asarray(sim.fy)[idx]))
 
 
-def run_tension(specimen, *, strain_rate: float = ld.DEFAULT_STRAIN_RATE,
+def run_tension(specimen, *, strain_rate: float | None = None,
+                platen_velocity: float = ld.DEFAULT_PLATEN_VELOCITY,
                 post_peak: float | None = ld.DEFAULT_POST_PEAK, max_strain: float | None = None,
                 grip_depth: float | None = None, damping: float = 0.7,
                 timestep_factor: float | None = None,
@@ -58,8 +59,11 @@ def run_tension(specimen, *, strain_rate: float = ld.DEFAULT_STRAIN_RATE,
     Parameters
     ----------
     specimen : sim.Specimen
-    strain_rate : float, 1/s
-        Grip separation rate / initial grip distance (each grip moves at rate × L0 / 2).
+    strain_rate : float, 1/s, optional
+        Loading strain rate; default 2 ``platen_velocity`` / L (L the loaded length).
+    platen_velocity : float, m/s
+        Speed of each grip when ``strain_rate`` is not given (default
+        :data:`sim.protocols.loading.DEFAULT_PLATEN_VELOCITY`).
     post_peak, max_strain : float or None
         Stop rule on the tensile stress (see :func:`sim.protocols.ucs.run_ucs`).
     grip_depth : float, m, optional
@@ -73,10 +77,8 @@ def run_tension(specimen, *, strain_rate: float = ld.DEFAULT_STRAIN_RATE,
     result : TestResult
         ``summary["tensile_mpa"]`` = σt (positive), ``E_tension_gpa``, cracks and P_sim.
     """
-    if not (strain_rate > 0 and math.isfinite(strain_rate)):
-        raise ValueError(f"'strain_rate' = {strain_rate!r}, expected a positive number (1/s)")
     stop = ld.StopRule(post_peak=post_peak, max_strain=max_strain)
-    specimen.validate("specimen")
+    specimen, _ = ld.relieve_overlaps(specimen.validate("specimen"))
     opts = dict(damping=damping, **(sim_options or {}))
     if timestep_factor is not None:
         opts["timestep_factor"] = timestep_factor
@@ -86,7 +88,7 @@ def run_tension(specimen, *, strain_rate: float = ld.DEFAULT_STRAIN_RATE,
     bottom, top = grip_indices(y0, specimen.r, box, depth=grip_depth)
     l0 = float(y0[top].mean() - y0[bottom].mean())
     w0 = float(box[1] - box[0])
-    v = 0.5 * strain_rate * l0
+    strain_rate, v = ld.loading_rate(strain_rate, platen_velocity, l0)
     free = np.setdiff1d(np.arange(x0.size), np.r_[bottom, top])
     gbox = np.array([box[0], box[1], (y0[bottom] + specimen.r[bottom]).max(),
                      (y0[top] - specimen.r[top]).min()])

@@ -52,13 +52,8 @@ def compression_summary(history, *, stress_col="axial_stress_mpa", e_method="tan
     }
 
 
-def _check_rate(strain_rate):
-    if not (isinstance(strain_rate, (int, float)) and strain_rate > 0
-            and math.isfinite(strain_rate)):
-        raise ValueError(f"'strain_rate' = {strain_rate!r}, expected a positive number (1/s)")
-
-
-def run_ucs(specimen, *, strain_rate: float = ld.DEFAULT_STRAIN_RATE,
+def run_ucs(specimen, *, strain_rate: float | None = None,
+            platen_velocity: float = ld.DEFAULT_PLATEN_VELOCITY,
             post_peak: float | None = ld.DEFAULT_POST_PEAK, max_strain: float | None = None,
             damping: float = 0.7, timestep_factor: float | None = None,
             record_strain: float = ld.RECORD_STRAIN, ramp_records: int = 5,
@@ -70,9 +65,12 @@ def run_ucs(specimen, *, strain_rate: float = ld.DEFAULT_STRAIN_RATE,
     Parameters
     ----------
     specimen : sim.Specimen
-    strain_rate : float, 1/s
-        Platen strain rate (each platen moves at rate × H / 2), reached after a linear ramp
-        over the first ``ramp_records`` records.
+    strain_rate : float, 1/s, optional
+        Loading strain rate; default 2 ``platen_velocity`` / L (L the loaded length).
+    platen_velocity : float, m/s
+        Speed of each platen when ``strain_rate`` is not given (default
+        :data:`sim.protocols.loading.DEFAULT_PLATEN_VELOCITY`).
+        The speed is reached after a linear ramp over the first ``ramp_records`` records.
     post_peak : float or None
         Stop when the stress falls below this fraction of the peak (default 0.8).
     max_strain : float or None
@@ -107,9 +105,8 @@ def run_ucs(specimen, *, strain_rate: float = ld.DEFAULT_STRAIN_RATE,
         Bad rate or stop rule. KeyboardInterrupt is re-raised after the checkpoint and the
         partial outputs are written.
     """
-    _check_rate(strain_rate)
     stop = ld.StopRule(post_peak=post_peak, max_strain=max_strain)
-    specimen.validate("specimen")
+    specimen, _ = ld.relieve_overlaps(specimen.validate("specimen"))
     opts = dict(damping=damping, **(sim_options or {}))
     if timestep_factor is not None:
         opts["timestep_factor"] = timestep_factor
@@ -118,7 +115,7 @@ def run_ucs(specimen, *, strain_rate: float = ld.DEFAULT_STRAIN_RATE,
     lo, hi = ld.add_platens(sim, box, axis=1, fric=0.0)
     h0 = ld.platen_gap(sim, lo, hi)
     w0 = float(box[1] - box[0])
-    v = 0.5 * strain_rate * h0
+    strain_rate, v = ld.loading_rate(strain_rate, platen_velocity, h0)
     x0, y0 = np.array(sim.x, copy=True), np.array(sim.y, copy=True)
     gauge = ld.gauge_indices(x0, y0, box)
     left, right = ld.side_indices(x0, specimen.r, box)
