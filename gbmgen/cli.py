@@ -1,4 +1,4 @@
-"""``gbmgen build | info | plot | export``: command-line interface (no maths here).
+"""``gbmgen build | info | plot | defect | export``: command-line interface (no maths here).
 
 Exit codes: 0 ok, 2 bad input (one line on stderr naming the file or field).
 """
@@ -9,6 +9,8 @@ import json
 import os
 import sys
 import time
+
+import numpy as np
 
 from sim.errors import InputError as SimInputError
 
@@ -76,6 +78,23 @@ def _parser():
     q.add_argument("--out", help="PNG path [specimen with .png]")
     q.add_argument("--particles", action="store_true")
     q.add_argument("--joints", action="store_true", help="draw smooth-joint bonds")
+
+    d = sub.add_parser("defect", help="cut holes or a flaw into a specimen (thesis Ch. 6)")
+    d.add_argument("specimen")
+    d.add_argument("--out", required=True, help="specimen.npz to write")
+    d.add_argument("--hole", choices=("intra", "inter", "trans3", "trans4"),
+                   help="one hole placed automatically inside 1 grain / on a boundary of 2 / "
+                        "across 3 or 4 grains")
+    d.add_argument("--diameter-mm", type=float, default=3.0, help="hole diameter [%(default)s]")
+    d.add_argument("--double-hole", action="store_true",
+                   help="two holes of --diameter-mm, --bridge-mm apart at --angle-deg")
+    d.add_argument("--bridge-mm", type=float, default=1.5, help="wall-to-wall distance")
+    d.add_argument("--flaw", action="store_true", help="inclined flaw --length-mm x --width-mm")
+    d.add_argument("--length-mm", type=float, default=10.0)
+    d.add_argument("--width-mm", type=float, default=0.5)
+    d.add_argument("--angle-deg", type=float, default=0.0, help="from horizontal")
+    d.add_argument("--at-mm", type=float, nargs=2, metavar=("X", "Y"),
+                   help="centre of a double hole / flaw / manual hole [specimen centre]")
 
     e = sub.add_parser("export", help="PFC .geom and/or VTK of a specimen")
     e.add_argument("specimen")
@@ -199,6 +218,34 @@ def _build(a):
     return 0
 
 
+def _defect(a, spec):
+    from . import defects
+    box = spec.box
+    at = np.array(a.at_mm) * 1e-3 if a.at_mm else \
+        np.array([0.5 * (box[0] + box[1]), 0.5 * (box[2] + box[3])])
+    r = 0.5 * a.diameter_mm * 1e-3
+    n = sum(bool(v) for v in (a.hole, a.double_hole, a.flaw))
+    if n != 1 and not (n == 0 and a.at_mm):
+        raise InputError("defect: give exactly one of --hole KIND, --double-hole, --flaw "
+                         "(or --at-mm X Y for one hole there)")
+    if a.hole:
+        c = defects.place_hole(spec, a.hole, r) if not a.at_mm else at
+        out = defects.cut_holes(spec, [c], r, kind=a.hole)
+    elif a.double_hole:
+        out = defects.cut_holes(spec, defects.double_hole_centres(at, r, a.bridge_mm * 1e-3,
+                                                                  a.angle_deg), r, kind="double")
+    elif a.flaw:
+        out = defects.cut_flaw(spec, at, a.length_mm * 1e-3, a.width_mm * 1e-3, a.angle_deg)
+    else:
+        out = defects.cut_holes(spec, [at], r, kind="manual")
+    out.save(a.out)
+    rec = out.meta["defects"][-1]
+    print(f"wrote {a.out}: {rec['type']} removed {rec['particles_removed']} particles, "
+          f"{rec['bonds_removed']} bonds" + (f", grains cut {rec['grains_cut']}"
+                                             if "grains_cut" in rec else ""))
+    return 0
+
+
 def _load(path):
     from sim.specimen import Specimen
     return Specimen.load(path)
@@ -227,6 +274,8 @@ def main(argv=None) -> int:
             plot_specimen(spec, out, particles=a.particles, joints=a.joints)
             print(f"wrote {out}")
             return 0
+        if a.command == "defect":
+            return _defect(a, spec)
         if a.command == "export":
             if not (a.geom or a.vtk):
                 raise InputError("export: give --geom PATH and/or --vtk PREFIX")
