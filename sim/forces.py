@@ -1,8 +1,13 @@
-"""Loops over the contact lists: call the laws, write per-pair forces (no scatter, no races).
+"""Loops over the contact lists: call the laws, accumulate forces into a per-thread buffer.
 
-Each ``*_range`` kernel processes pairs ``lo:hi`` of one list and writes, per pair k, the force on
-particle j (``fx[k], fy[k]``; particle i receives the opposite) and the moments on i and j at
-``mom[2k]`` and ``mom[2k + 1]``. The particle pass (:mod:`sim.integrate`) gathers them. Kernels
+Each ``*_range`` kernel processes pairs ``lo:hi`` of one list and adds, per pair, the force on
+particle j and −(that force) on particle i, and the moments on both, into ``acc`` laid out as
+``acc[4p:4p+3]`` = (fx, fy, moment) of particle p. Every thread owns its own ``acc`` (one row of
+the (threads, 4N) buffer), so the scatter is race-free (STYLE.md §5 rule 6); the particle pass
+(:mod:`sim.integrate`) sums the rows. Pair state (forces, shear history) is stored per pair.
+Particle kinematics are read from the packed ``kin[8p:8p+6]`` = (x, y, vx, vy, w, r), one cache
+line per particle.
+Kernels
 check nothing; arrays are the row views of the :mod:`sim.state` tables.
 
 Kinematics (REFERENCE.md conventions): n̂ = (x_j − x_i)/d, t̂ = (−n_y, n_x), g = d − (R_i + R_j);
@@ -21,8 +26,8 @@ from .contacts.smooth_joint import sj_update
 
 
 @njit
-def pb_range(lo, hi, step, dt, x, y, vx, vy, w, r, bi, bj, bstate, fn_, fs_, mb_, kna_, ksa_,
-             kni_, ari_, tena_, coha_, tanfa_, bfx, bfy, bmom, brk_x, brk_y, brk_nx, brk_ny,
+def pb_range(lo, hi, step, dt, kin, bi, bj, bstate, fn_, fs_, mb_, kna_, ksa_,
+             kni_, ari_, tena_, coha_, tanfa_, acc, brk_x, brk_y, brk_nx, brk_ny,
              brk_step):
     """Parallel bonds ``lo:hi``; returns the number of bonds that broke in this step."""
     nbreak = 0
@@ -31,33 +36,53 @@ def pb_range(lo, hi, step, dt, x, y, vx, vy, w, r, bi, bj, bstate, fn_, fs_, mb_
             continue
         i = bi[b]
         j = bj[b]
-        dx = x[j] - x[i]
-        dy = y[j] - y[i]
+        oi = 8 * i
+        oj = 8 * j
+        xi = kin[oi]
+        yi = kin[oi + 1]
+        vxi = kin[oi + 2]
+        vyi = kin[oi + 3]
+        wi = kin[oi + 4]
+        ri = kin[oi + 5]
+        xj = kin[oj]
+        yj = kin[oj + 1]
+        vxj = kin[oj + 2]
+        vyj = kin[oj + 3]
+        wj = kin[oj + 4]
+        rj = kin[oj + 5]
+        dx = xj - xi
+        dy = yj - yi
         d = sqrt(dx * dx + dy * dy)
         inv = 1.0 / d
         nx = dx * inv
         ny = dy * inv
-        hg = 0.5 * (d - r[i] - r[j])
-        ai = r[i] + hg
-        aj = r[j] + hg
-        dvx = vx[j] - vx[i]
-        dvy = vy[j] - vy[i]
+        hg = 0.5 * (d - ri - rj)
+        ai = ri + hg
+        aj = rj + hg
+        dvx = vxj - vxi
+        dvy = vyj - vyi
         vn = dvx * nx + dvy * ny
-        vt = -dvx * ny + dvy * nx - w[j] * aj - w[i] * ai
+        vt = -dvx * ny + dvy * nx - wj * aj - wi * ai
         fn, fs, mb, mode = pb_update(fn_[b], fs_[b], mb_[b], vn * dt, vt * dt,
-                                     (w[j] - w[i]) * dt, kna_[b], ksa_[b], kni_[b], ari_[b],
+                                     (wj - wi) * dt, kna_[b], ksa_[b], kni_[b], ari_[b],
                                      tena_[b], coha_[b], tanfa_[b])
         fn_[b] = fn
         fs_[b] = fs
         mb_[b] = mb
-        bfx[b] = fn * nx - fs * ny
-        bfy[b] = fn * ny + fs * nx
-        bmom[2 * b] = -ai * fs - mb
-        bmom[2 * b + 1] = -aj * fs + mb
+        fx = fn * nx - fs * ny
+        fy = fn * ny + fs * nx
+        o = 4 * i
+        acc[o] -= fx
+        acc[o + 1] -= fy
+        acc[o + 2] += -ai * fs - mb
+        o = 4 * j
+        acc[o] += fx
+        acc[o + 1] += fy
+        acc[o + 2] += -aj * fs + mb
         if mode != 0:
             bstate[b] = mode
-            brk_x[b] = x[i] + ai * nx
-            brk_y[b] = y[i] + ai * ny
+            brk_x[b] = xi + ai * nx
+            brk_y[b] = yi + ai * ny
             brk_nx[b] = nx
             brk_ny[b] = ny
             brk_step[b] = step
@@ -66,26 +91,40 @@ def pb_range(lo, hi, step, dt, x, y, vx, vy, w, r, bi, bj, bstate, fn_, fs_, mb_
 
 
 @njit
-def sj_range(lo, hi, step, dt, x, y, vx, vy, w, r, bi, bj, bstate, fn_, fs_, un_, kna_, ksa_,
-             tena_, coha_, tanfa_, fric_, tandil_, njx_, njy_, bfx, bfy, bmom, brk_x, brk_y,
-             brk_nx, brk_ny, brk_step):
+def sj_range(lo, hi, step, dt, kin, bi, bj, bstate, fn_, fs_, un_, kna_, ksa_,
+             tena_, coha_, tanfa_, fric_, tandil_, njx_, njy_, acc, brk_x, brk_y, brk_nx, brk_ny,
+             brk_step):
     """Smooth joints ``lo:hi`` (forces along the fixed joint frame, no moment); returns breaks."""
     nbreak = 0
     for b in range(lo, hi):
         i = bi[b]
         j = bj[b]
-        dx = x[j] - x[i]
-        dy = y[j] - y[i]
+        oi = 8 * i
+        oj = 8 * j
+        xi = kin[oi]
+        yi = kin[oi + 1]
+        vxi = kin[oi + 2]
+        vyi = kin[oi + 3]
+        wi = kin[oi + 4]
+        ri = kin[oi + 5]
+        xj = kin[oj]
+        yj = kin[oj + 1]
+        vxj = kin[oj + 2]
+        vyj = kin[oj + 3]
+        wj = kin[oj + 4]
+        rj = kin[oj + 5]
+        dx = xj - xi
+        dy = yj - yi
         d = sqrt(dx * dx + dy * dy)
         inv = 1.0 / d
         nx = dx * inv
         ny = dy * inv
-        hg = 0.5 * (d - r[i] - r[j])
-        ai = r[i] + hg
-        aj = r[j] + hg
-        rot = -w[j] * aj - w[i] * ai
-        vxc = vx[j] - vx[i] - rot * ny
-        vyc = vy[j] - vy[i] + rot * nx
+        hg = 0.5 * (d - ri - rj)
+        ai = ri + hg
+        aj = rj + hg
+        rot = -wj * aj - wi * ai
+        vxc = vxj - vxi - rot * ny
+        vyc = vyj - vyi + rot * nx
         jx = njx_[b]
         jy = njy_[b]
         dun = (vxc * jx + vyc * jy) * dt
@@ -98,15 +137,19 @@ def sj_range(lo, hi, step, dt, x, y, vx, vy, w, r, bi, bj, bstate, fn_, fs_, un_
         fs_[b] = fs
         fx = fn * jx - fs * jy
         fy = fn * jy + fs * jx
-        bfx[b] = fx
-        bfy[b] = fy
         c = nx * fy - ny * fx
-        bmom[2 * b] = -ai * c
-        bmom[2 * b + 1] = -aj * c
+        o = 4 * i
+        acc[o] -= fx
+        acc[o + 1] -= fy
+        acc[o + 2] -= ai * c
+        o = 4 * j
+        acc[o] += fx
+        acc[o + 1] += fy
+        acc[o + 2] -= aj * c
         if broke != 0:
             bstate[b] = state
-            brk_x[b] = x[i] + ai * nx
-            brk_y[b] = y[i] + ai * ny
+            brk_x[b] = xi + ai * nx
+            brk_y[b] = yi + ai * ny
             brk_nx[b] = jx
             brk_ny[b] = jy
             brk_step[b] = step
@@ -115,9 +158,8 @@ def sj_range(lo, hi, step, dt, x, y, vx, vy, w, r, bi, bj, bstate, fn_, fs_, un_
 
 
 @njit
-def contact_range(lo, hi, dt, x, y, vx, vy, w, r, ci, cj, fs_, kn_, ks_, mu_, cfx, cfy, cfn,
-                  cmom):
-    """Linear contacts ``lo:hi`` without dashpots.
+def contact_range(lo, hi, dt, kin, ci, cj, fs_, kn_, ks_, mu_, cfn, acc):
+    """Linear contacts ``lo:hi`` without dashpots (``cfn`` = normal force, N).
 
     Returns
     -------
@@ -131,36 +173,53 @@ def contact_range(lo, hi, dt, x, y, vx, vy, w, r, ci, cj, fs_, kn_, ks_, mu_, cf
     for k in range(lo, hi):
         i = ci[k]
         j = cj[k]
-        dx = x[j] - x[i]
-        dy = y[j] - y[i]
-        rs = r[i] + r[j]
+        oi = 8 * i
+        oj = 8 * j
+        xi = kin[oi]
+        yi = kin[oi + 1]
+        vxi = kin[oi + 2]
+        vyi = kin[oi + 3]
+        wi = kin[oi + 4]
+        ri = kin[oi + 5]
+        xj = kin[oj]
+        yj = kin[oj + 1]
+        vxj = kin[oj + 2]
+        vyj = kin[oj + 3]
+        wj = kin[oj + 4]
+        rj = kin[oj + 5]
+        dx = xj - xi
+        dy = yj - yi
+        rs = ri + rj
         d2 = dx * dx + dy * dy
         if d2 >= rs * rs:
-            fs_[k] = 0.0
-            cfx[k] = 0.0
-            cfy[k] = 0.0
-            cfn[k] = 0.0
-            cmom[2 * k] = 0.0
-            cmom[2 * k + 1] = 0.0
+            if cfn[k] != 0.0 or fs_[k] != 0.0:
+                fs_[k] = 0.0
+                cfn[k] = 0.0
             continue
         d = sqrt(d2)
         inv = 1.0 / d
         nx = dx * inv
         ny = dy * inv
         ov = rs - d
-        ai = r[i] - 0.5 * ov
-        aj = r[j] - 0.5 * ov
-        dvx = vx[j] - vx[i]
-        dvy = vy[j] - vy[i]
-        vt = -dvx * ny + dvy * nx - w[j] * aj - w[i] * ai
+        ai = ri - 0.5 * ov
+        aj = rj - 0.5 * ov
+        dvx = vxj - vxi
+        dvy = vyj - vyi
+        vt = -dvx * ny + dvy * nx - wj * aj - wi * ai
         fn, fs, slip = linear_force(ov, vt * dt, kn_[k], ks_[k], mu_[k], fs_[k])
         fs_[k] = fs
         cfn[k] = fn
-        cfx[k] = fn * nx - fs * ny
-        cfy[k] = fn * ny + fs * nx
-        cmom[2 * k] = -ai * fs
-        cmom[2 * k + 1] = -aj * fs
-        rmin = r[i] if r[i] < r[j] else r[j]
+        fx = fn * nx - fs * ny
+        fy = fn * ny + fs * nx
+        o = 4 * i
+        acc[o] -= fx
+        acc[o + 1] -= fy
+        acc[o + 2] -= ai * fs
+        o = 4 * j
+        acc[o] += fx
+        acc[o + 1] += fy
+        acc[o + 2] -= aj * fs
+        rmin = ri if ri < rj else rj
         q = ov / rmin
         if q > worst:
             worst = q
@@ -169,47 +228,64 @@ def contact_range(lo, hi, dt, x, y, vx, vy, w, r, ci, cj, fs_, kn_, ks_, mu_, cf
 
 
 @njit
-def contact_range_dashpot(lo, hi, dt, x, y, vx, vy, w, r, ci, cj, fs_, kn_, ks_, mu_, cn_, cs_,
-                          cfx, cfy, cfn, cmom):
+def contact_range_dashpot(lo, hi, dt, kin, ci, cj, fs_, kn_, ks_, mu_, cn_, cs_,
+                          cfn, acc):
     """Linear contacts ``lo:hi`` with viscous dashpots (dp_mode 0: full, may be tensile)."""
     worst = 0.0
     kworst = -1
     for k in range(lo, hi):
         i = ci[k]
         j = cj[k]
-        dx = x[j] - x[i]
-        dy = y[j] - y[i]
-        rs = r[i] + r[j]
+        oi = 8 * i
+        oj = 8 * j
+        xi = kin[oi]
+        yi = kin[oi + 1]
+        vxi = kin[oi + 2]
+        vyi = kin[oi + 3]
+        wi = kin[oi + 4]
+        ri = kin[oi + 5]
+        xj = kin[oj]
+        yj = kin[oj + 1]
+        vxj = kin[oj + 2]
+        vyj = kin[oj + 3]
+        wj = kin[oj + 4]
+        rj = kin[oj + 5]
+        dx = xj - xi
+        dy = yj - yi
+        rs = ri + rj
         d2 = dx * dx + dy * dy
         if d2 >= rs * rs:
-            fs_[k] = 0.0
-            cfx[k] = 0.0
-            cfy[k] = 0.0
-            cfn[k] = 0.0
-            cmom[2 * k] = 0.0
-            cmom[2 * k + 1] = 0.0
+            if cfn[k] != 0.0 or fs_[k] != 0.0:
+                fs_[k] = 0.0
+                cfn[k] = 0.0
             continue
         d = sqrt(d2)
         inv = 1.0 / d
         nx = dx * inv
         ny = dy * inv
         ov = rs - d
-        ai = r[i] - 0.5 * ov
-        aj = r[j] - 0.5 * ov
-        dvx = vx[j] - vx[i]
-        dvy = vy[j] - vy[i]
+        ai = ri - 0.5 * ov
+        aj = rj - 0.5 * ov
+        dvx = vxj - vxi
+        dvy = vyj - vyi
         vn = dvx * nx + dvy * ny
-        vt = -dvx * ny + dvy * nx - w[j] * aj - w[i] * ai
+        vt = -dvx * ny + dvy * nx - wj * aj - wi * ai
         fn, fs, slip = linear_force(ov, vt * dt, kn_[k], ks_[k], mu_[k], fs_[k])
         fs_[k] = fs
         fnt = fn - cn_[k] * vn
         fst = fs - cs_[k] * vt
         cfn[k] = fnt
-        cfx[k] = fnt * nx - fst * ny
-        cfy[k] = fnt * ny + fst * nx
-        cmom[2 * k] = -ai * fst
-        cmom[2 * k + 1] = -aj * fst
-        rmin = r[i] if r[i] < r[j] else r[j]
+        fx = fnt * nx - fst * ny
+        fy = fnt * ny + fst * nx
+        o = 4 * i
+        acc[o] -= fx
+        acc[o + 1] -= fy
+        acc[o + 2] -= ai * fst
+        o = 4 * j
+        acc[o] += fx
+        acc[o + 1] += fy
+        acc[o + 2] -= aj * fst
+        rmin = ri if ri < rj else rj
         q = ov / rmin
         if q > worst:
             worst = q

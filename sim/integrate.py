@@ -13,18 +13,21 @@ from . import config
 from ._jit import njit, prange
 from .damping import local_damping
 from .forces import contact_range, contact_range_dashpot, pb_range, sj_range
-from .state import (ARI, BFX, BFY, BRK_NX, BRK_NY, BRK_STEP, BRK_X, BRK_Y, C_CN, C_CS, C_FN,
-                    C_FS, C_FX, C_FY, C_KN, C_KS, C_MU, COHA, FM, FN, FRIC, FS, FVX, FVY, FW, FX,
+from .state import (ARI, BRK_NX, BRK_NY, BRK_STEP, BRK_X, BRK_Y, C_CN, C_CS, C_FN,
+                    C_FS, C_KN, C_KS, C_MU, COHA, FM, FN, FRIC, FS, FVX, FVY, FW, FX,
                     FY, INVI, INVM, KNA, KNI, KSA, MB, NJX, NJY, Q_FN, Q_FS, Q_KN, Q_KS, Q_MU, R,
-                    TANDIL, TANFA, TENA, UN, VX, VY, W, W_DISP, WFM, WFX, WFY, X, X0, Y, Y0)
+                    TANDIL, TANFA, TENA, UN, VX, VY, W, W_DISP, X, X0, Y, Y0)
 from .walls import wall_forces, wall_motion
 
 
 @njit
-def particle_range(lo, hi, dt, alpha, step_lim, has_walls, x, y, vx, vy, w, fx, fy, fm, r,
-                   invm, invi, x0, y0, fvx, fvy, fw, wfx, wfy, wfm, fix, bptr, bref, bfx, bfy,
-                   bmom, cptr, cref, cfx, cfy, cmom):
-    """Gather pair forces, damp and integrate particles ``lo:hi`` (writes fx, fy, fm, v, w, x).
+def particle_range(lo, hi, nrows, dt, alpha, step_lim, x, y, vx, vy, w, fx, fy, fm, r, invm,
+                   invi, x0, y0, fvx, fvy, fw, fix, acc, kin):
+    """Sum the force buffers, damp and integrate particles ``lo:hi``.
+
+    Reads and zeroes ``acc[:nrows, 4p:4p+3]``; writes fx, fy, fm (the unbalanced contact
+    force and moment), v^{n+1/2}, w and x^{n+1}, and copies x, y, vx, vy, w into the packed
+    ``kin[8p:8p+5]`` that the pair passes read (one cache line per particle).
 
     Returns
     -------
@@ -39,27 +42,20 @@ def particle_range(lo, hi, dt, alpha, step_lim, has_walls, x, y, vx, vy, w, fx, 
     bad = -1
     work = 0.0
     for p in range(lo, hi):
-        sx = 0.0
-        sy = 0.0
-        sm = 0.0
-        for q in range(bptr[p], bptr[p + 1]):
-            ref = bref[q]
-            k = ref >> 1
-            s = 2.0 * (ref & 1) - 1.0
-            sx += s * bfx[k]
-            sy += s * bfy[k]
-            sm += bmom[ref]
-        for q in range(cptr[p], cptr[p + 1]):
-            ref = cref[q]
-            k = ref >> 1
-            s = 2.0 * (ref & 1) - 1.0
-            sx += s * cfx[k]
-            sy += s * cfy[k]
-            sm += cmom[ref]
-        if has_walls:
-            sx += wfx[p]
-            sy += wfy[p]
-            sm += wfm[p]
+        o = 4 * p
+        sx = acc[0, o]
+        sy = acc[0, o + 1]
+        sm = acc[0, o + 2]
+        acc[0, o] = 0.0
+        acc[0, o + 1] = 0.0
+        acc[0, o + 2] = 0.0
+        for c in range(1, nrows):
+            sx += acc[c, o]
+            sy += acc[c, o + 1]
+            sm += acc[c, o + 2]
+            acc[c, o] = 0.0
+            acc[c, o + 1] = 0.0
+            acc[c, o + 2] = 0.0
         fx[p] = sx
         fy[p] = sy
         fm[p] = sm
@@ -89,6 +85,12 @@ def particle_range(lo, hi, dt, alpha, step_lim, has_walls, x, y, vx, vy, w, fx, 
         uy = vy[p] * dt
         x[p] += ux
         y[p] += uy
+        k = 8 * p
+        kin[k] = x[p]
+        kin[k + 1] = y[p]
+        kin[k + 2] = vx[p]
+        kin[k + 3] = vy[p]
+        kin[k + 4] = w[p]
         if not (abs(ux) + abs(uy) <= step_lim * r[p]) and bad < 0:
             bad = p
         ex = x[p] - x0[p]
@@ -100,47 +102,85 @@ def particle_range(lo, hi, dt, alpha, step_lim, has_walls, x, y, vx, vy, w, fx, 
 
 
 @njit
-def gather_range(lo, hi, has_walls, fx, fy, fm, wfx, wfy, wfm, bptr, bref, bfx, bfy, bmom, cptr,
-                 cref, cfx, cfy, cmom):
-    """Sum the current pair (and wall) forces on particles ``lo:hi`` into fx, fy, fm only."""
+def gather_range(lo, hi, nrows, fx, fy, fm, acc):
+    """Sum the force buffers of particles ``lo:hi`` into fx, fy, fm and leave the sum in row 0
+    (canonical form: the other rows zero), without moving anything."""
     for p in range(lo, hi):
-        sx = 0.0
-        sy = 0.0
-        sm = 0.0
-        for q in range(bptr[p], bptr[p + 1]):
-            ref = bref[q]
-            k = ref >> 1
-            s = 2.0 * (ref & 1) - 1.0
-            sx += s * bfx[k]
-            sy += s * bfy[k]
-            sm += bmom[ref]
-        for q in range(cptr[p], cptr[p + 1]):
-            ref = cref[q]
-            k = ref >> 1
-            s = 2.0 * (ref & 1) - 1.0
-            sx += s * cfx[k]
-            sy += s * cfy[k]
-            sm += cmom[ref]
-        if has_walls:
-            sx += wfx[p]
-            sy += wfy[p]
-            sm += wfm[p]
+        o = 4 * p
+        sx = acc[0, o]
+        sy = acc[0, o + 1]
+        sm = acc[0, o + 2]
+        for c in range(1, nrows):
+            sx += acc[c, o]
+            sy += acc[c, o + 1]
+            sm += acc[c, o + 2]
+            acc[c, o] = 0.0
+            acc[c, o + 1] = 0.0
+            acc[c, o + 2] = 0.0
+        acc[0, o] = sx
+        acc[0, o + 1] = sy
+        acc[0, o + 2] = sm
         fx[p] = sx
         fy[p] = sy
         fm[p] = sm
 
 
+@njit
+def pairs_chunk(c, nchunks, step, dt, use_dash, kin, bi, bj, bstate, bf, npb, nsj, ci, cj, cf,
+                nc, acc):
+    """All pair laws of chunk ``c`` (its share of parallel bonds, smooth joints and contacts),
+    accumulated into ``acc`` (this chunk's buffer row).
+
+    Returns
+    -------
+    nbreak : int
+    worst : float
+        Largest contact overlap / min radius.
+    kworst : int
+        Its contact index.
+    """
+    nbreak = 0
+    if npb > 0:
+        lo = (npb * c) // nchunks
+        hi = (npb * (c + 1)) // nchunks
+        nbreak += pb_range(lo, hi, step, dt, kin, bi, bj, bstate, bf[FN], bf[FS],
+                           bf[MB], bf[KNA], bf[KSA], bf[KNI], bf[ARI], bf[TENA], bf[COHA],
+                           bf[TANFA], acc, bf[BRK_X], bf[BRK_Y], bf[BRK_NX], bf[BRK_NY],
+                           bf[BRK_STEP])
+    if nsj > 0:
+        lo = npb + (nsj * c) // nchunks
+        hi = npb + (nsj * (c + 1)) // nchunks
+        nbreak += sj_range(lo, hi, step, dt, kin, bi, bj, bstate, bf[FN], bf[FS],
+                           bf[UN], bf[KNA], bf[KSA], bf[TENA], bf[COHA], bf[TANFA], bf[FRIC],
+                           bf[TANDIL], bf[NJX], bf[NJY], acc, bf[BRK_X], bf[BRK_Y], bf[BRK_NX],
+                           bf[BRK_NY], bf[BRK_STEP])
+    worst = 0.0
+    kworst = -1
+    if nc > 0:
+        lo = (nc * c) // nchunks
+        hi = (nc * (c + 1)) // nchunks
+        if use_dash:
+            worst, kworst = contact_range_dashpot(lo, hi, dt, kin, ci, cj,
+                                                  cf[C_FS], cf[C_KN], cf[C_KS], cf[C_MU],
+                                                  cf[C_CN], cf[C_CS], cf[C_FN], acc)
+        else:
+            worst, kworst = contact_range(lo, hi, dt, kin, ci, cj, cf[C_FS],
+                                          cf[C_KN], cf[C_KS], cf[C_MU], cf[C_FN], acc)
+    return nbreak, worst, kworst
+
+
 @njit(parallel=True)
 def run_steps(nsteps, step0, dt, alpha, nchunks, skin, step_lim, overlap_lim, t, servo_alpha,
-              pf, fix, bi, bj, bstate, bf, bmom, bptr, bref, npb, ci, cj, cf, cmom, cptr, cref,
-              nc, use_dash, wf, qp, qw, qf, nq, refresh, info):
+              pf, fix, bi, bj, bstate, bf, npb, ci, cj, cf, nc, use_dash, wf, qp, qw, qf, nq,
+              acc, refresh, info):
     """Run up to ``nsteps`` steps in place (PFC cycle order).
 
-    Each step: (1) particle pass: gather the pair forces F^n, local damping with v^{n-1/2},
-    v^{n+1/2} and x^{n+1}; (2) wall motion (servo from the wall forces F^n); (3) force passes
-    at x^{n+1} with increments Δδ = V^{n+1/2} Δt: parallel bonds, smooth joints, contacts,
-    walls. After a call the stored pair forces and the particle sums fx, fy, fm belong to the
-    current positions.
+    Each step: (1) particle pass: sum the force buffers (F^n), local damping with v^{n-1/2},
+    v^{n+1/2} and x^{n+1}; (2) wall motion (servo from the wall forces F^n); (3) one parallel
+    pass over all pairs at x^{n+1} with increments Δδ = V^{n+1/2} Δt (parallel bonds, smooth
+    joints, contacts), each chunk into its own buffer row; (4) wall contacts (serial, row 0).
+    Two parallel regions per step. Passes a scene lacks (joints, walls, dashpots) are skipped
+    per step, never tested per contact.
 
     Parameters
     ----------
@@ -149,7 +189,7 @@ def run_steps(nsteps, step0, dt, alpha, nchunks, skin, step_lim, overlap_lim, t,
     dt, alpha : float
         Time step (s) and local damping coefficient.
     nchunks : int
-        Static split of every pass (number of threads).
+        Static split of every pass; at most ``acc.shape[0]``.
     skin : float, m
         Verlet skin; the loop stops for a rebuild when the largest particle displacement since
         the last build exceeds skin/2, or that plus the largest wall displacement exceeds skin.
@@ -161,9 +201,12 @@ def run_steps(nsteps, step0, dt, alpha, nchunks, skin, step_lim, overlap_lim, t,
         The :class:`sim.state.State` tables (written in place).
     use_dash : bool
         Contacts carry viscous dashpots (cf rows C_CN, C_CS).
+    acc : (T, 4N) float64
+        Force buffers, one row per chunk; on entry and exit in canonical form (row 0 = F at
+        the current positions, other rows zero) unless ``refresh``.
     refresh : bool
-        First re-evaluate the contact and wall forces at the current positions with zero
-        increments (after a list rebuild or at the start).
+        First re-evaluate all pair and wall forces at the current positions with zero
+        increments (after a list rebuild, or after loading).
     info : (8,) float64, written
         [bond breaks, cause code, worst index, damping work (added), worst overlap ratio,
         max displacement, unused, unused].
@@ -193,21 +236,32 @@ def run_steps(nsteps, step0, dt, alpha, nchunks, skin, step_lim, overlap_lim, t,
     ores = np.zeros(nchunks)
     kres = np.zeros(nchunks, np.int64)
     maxd2 = 0.0
+    kin = np.empty(8 * n)
+    for c in prange(nchunks):
+        for p in range((n * c) // nchunks, (n * (c + 1)) // nchunks):
+            k = 8 * p
+            kin[k] = x[p]
+            kin[k + 1] = y[p]
+            kin[k + 2] = vx[p]
+            kin[k + 3] = vy[p]
+            kin[k + 4] = w[p]
+            kin[k + 5] = r[p]
+    if refresh:
+        acc[:, :] = 0.0
     s = -1 if refresh else 0
     while s < nsteps:
         moving = s >= 0
         step = step0 + s + 1
         dti = dt if moving else 0.0
         if moving:
-            # 1. particles: gather, damp, integrate
+            # 1. particles: sum buffers, damp, integrate
             for c in prange(nchunks):
                 lo = (n * c) // nchunks
                 hi = (n * (c + 1)) // nchunks
                 dres[c], kres[c], wres[c] = particle_range(
-                    lo, hi, dt, alpha, step_lim, has_walls, x, y, vx, vy, w, pf[FX], pf[FY],
+                    lo, hi, nchunks, dt, alpha, step_lim, x, y, vx, vy, w, pf[FX], pf[FY],
                     pf[FM], r, pf[INVM], pf[INVI], pf[X0], pf[Y0], pf[FVX], pf[FVY], pf[FW],
-                    pf[WFX], pf[WFY], pf[WFM], fix, bptr, bref, bf[BFX], bf[BFY], bmom, cptr,
-                    cref, cf[C_FX], cf[C_FY], cmom)
+                    fix, acc, kin)
             maxd2 = 0.0
             bad = -1
             for c in range(nchunks):
@@ -224,57 +278,23 @@ def run_steps(nsteps, step0, dt, alpha, nchunks, skin, step_lim, overlap_lim, t,
             # 2. walls move
             if has_walls:
                 wall_motion(dt, t, servo_alpha, wf)
-            # 3a. parallel bonds
-            if npb > 0:
-                for c in prange(nchunks):
-                    lo = (npb * c) // nchunks
-                    hi = (npb * (c + 1)) // nchunks
-                    bres[c] = pb_range(lo, hi, step, dt, x, y, vx, vy, w, r, bi, bj, bstate,
-                                       bf[FN], bf[FS], bf[MB], bf[KNA], bf[KSA], bf[KNI],
-                                       bf[ARI], bf[TENA], bf[COHA], bf[TANFA], bf[BFX],
-                                       bf[BFY], bmom, bf[BRK_X], bf[BRK_Y], bf[BRK_NX],
-                                       bf[BRK_NY], bf[BRK_STEP])
-                info[0] += bres.sum()
-            # 3b. smooth joints
-            if nsj > 0:
-                for c in prange(nchunks):
-                    lo = npb + (nsj * c) // nchunks
-                    hi = npb + (nsj * (c + 1)) // nchunks
-                    bres[c] = sj_range(lo, hi, step, dt, x, y, vx, vy, w, r, bi, bj, bstate,
-                                       bf[FN], bf[FS], bf[UN], bf[KNA], bf[KSA], bf[TENA],
-                                       bf[COHA], bf[TANFA], bf[FRIC], bf[TANDIL], bf[NJX],
-                                       bf[NJY], bf[BFX], bf[BFY], bmom, bf[BRK_X], bf[BRK_Y],
-                                       bf[BRK_NX], bf[BRK_NY], bf[BRK_STEP])
-                info[0] += bres.sum()
-        # 3c. contacts (bonded pairs included for their linear part)
+        # 3. all pairs, one region
+        for c in prange(nchunks):
+            bres[c], ores[c], kres[c] = pairs_chunk(c, nchunks, step, dti, use_dash, kin, bi, bj,
+                                                    bstate, bf, npb, nsj, ci, cj, cf, nc, acc[c])
         worst = 0.0
         kworst = -1
-        if nc > 0:
-            if use_dash:
-                for c in prange(nchunks):
-                    lo = (nc * c) // nchunks
-                    hi = (nc * (c + 1)) // nchunks
-                    ores[c], kres[c] = contact_range_dashpot(
-                        lo, hi, dti, x, y, vx, vy, w, r, ci, cj, cf[C_FS], cf[C_KN], cf[C_KS],
-                        cf[C_MU], cf[C_CN], cf[C_CS], cf[C_FX], cf[C_FY], cf[C_FN], cmom)
-            else:
-                for c in prange(nchunks):
-                    lo = (nc * c) // nchunks
-                    hi = (nc * (c + 1)) // nchunks
-                    ores[c], kres[c] = contact_range(
-                        lo, hi, dti, x, y, vx, vy, w, r, ci, cj, cf[C_FS], cf[C_KN], cf[C_KS],
-                        cf[C_MU], cf[C_FX], cf[C_FY], cf[C_FN], cmom)
-            for c in range(nchunks):
-                if ores[c] > worst:
-                    worst = ores[c]
-                    kworst = kres[c]
-        # 3d. walls
+        for c in range(nchunks):
+            info[0] += bres[c]
+            if ores[c] > worst:
+                worst = ores[c]
+                kworst = kres[c]
+        # 4. walls
         wworst = 0.0
         qworst = -1
         if has_walls:
-            wworst, qworst = wall_forces(dti, x, y, vx, vy, w, r, pf[WFX], pf[WFY], pf[WFM], wf,
-                                         qp, qw, nq, qf[Q_FS], qf[Q_KN], qf[Q_KS], qf[Q_MU],
-                                         qf[Q_FN])
+            wworst, qworst = wall_forces(dti, x, y, vx, vy, w, r, acc[0], wf, qp, qw, nq,
+                                         qf[Q_FS], qf[Q_KN], qf[Q_KS], qf[Q_MU], qf[Q_FN])
         info[4] = max(worst, wworst)
         if worst > overlap_lim:
             info[1] = 3.0
@@ -299,13 +319,11 @@ def run_steps(nsteps, step0, dt, alpha, nchunks, skin, step_lim, overlap_lim, t,
                     status = 1
         s += 1
         if status == 1 or s >= nsteps:
-            # leave fx, fy, fm = F at the current positions (read by energies, group forces)
+            # canonical buffers and fx, fy, fm = F at the current positions
             for c in prange(nchunks):
                 lo = (n * c) // nchunks
                 hi = (n * (c + 1)) // nchunks
-                gather_range(lo, hi, has_walls, pf[FX], pf[FY], pf[FM], pf[WFX], pf[WFY],
-                             pf[WFM], bptr, bref, bf[BFX], bf[BFY], bmom, cptr, cref, cf[C_FX],
-                             cf[C_FY], cmom)
+                gather_range(lo, hi, nchunks, pf[FX], pf[FY], pf[FM], acc)
             if status == 1:
                 return s, 1
     return nsteps, 0

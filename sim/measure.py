@@ -6,9 +6,8 @@ import math
 
 import numpy as np
 
-from .state import (C_FN, C_FS, C_FX, C_FY, C_KN, C_KS, FM, FN, FS, FX, FY, INERTIA, INVI,
-                    INVM, KNA, KNI, KSA, MASS, MB, Q_FN, Q_FS, Q_KN, Q_KS, UN, VX, VY, W, BFX,
-                    BFY, X, Y)
+from .state import (C_FN, C_FS, C_KN, C_KS, FM, FN, FS, FX, FY, INERTIA, INVI, INVM, KNA,
+                    KNI, KSA, MASS, MB, NJX, NJY, Q_FN, Q_FS, Q_KN, Q_KS, UN, VX, VY, W, X, Y)
 
 
 def energies(state, dt, alpha=0.0):
@@ -53,6 +52,41 @@ def energies(state, dt, alpha=0.0):
             "strain_wall": float(e_w)}
 
 
+def pair_forces(state):
+    """Force vectors on particle j of every pair, from the stored pair state.
+
+    Returns
+    -------
+    list of (i, j, fx, fy)
+        Intact parallel bonds (F̄n n̂ + F̄s t̂), smooth joints (Fn n̂j + Fs t̂j) and touching
+        contacts (normal force incl. the normal dashpot, plus the shear spring force), N.
+    """
+    pf = state.pf
+    x, y = pf[X], pf[Y]
+    out = []
+    bf = state.bf
+    for sel, jframe in ((np.nonzero((state.bkind == 0) & (state.bstate == 0))[0], False),
+                        (np.nonzero(state.bkind == 1)[0], True)):
+        i, j = state.bi[sel], state.bj[sel]
+        if jframe:
+            nx, ny = bf[NJX, sel], bf[NJY, sel]
+        else:
+            dx, dy = x[j] - x[i], y[j] - y[i]
+            d = np.hypot(dx, dy)
+            nx, ny = dx / d, dy / d
+        fn, fs = bf[FN, sel], bf[FS, sel]
+        out.append((i, j, fn * nx - fs * ny, fn * ny + fs * nx))
+    nc = state.nc
+    sel = np.nonzero(state.cf[C_FN, :nc] != 0)[0]
+    i, j = state.ci[sel], state.cj[sel]
+    dx, dy = x[j] - x[i], y[j] - y[i]
+    d = np.hypot(dx, dy)
+    nx, ny = dx / d, dy / d
+    fn, fs = state.cf[C_FN, sel], state.cf[C_FS, sel]
+    out.append((i, j, fn * nx - fs * ny, fn * ny + fs * nx))
+    return out
+
+
 def unbalanced_ratio(state):
     """Mean unbalanced force over mean contact force (PFC ``mech ratio-average``).
 
@@ -65,10 +99,7 @@ def unbalanced_ratio(state):
     if not np.any(free):
         return 0.0
     unb = np.mean(np.hypot(pf[FX][free], pf[FY][free]))
-    mags = [np.hypot(state.bf[BFX], state.bf[BFY])[(state.bstate == 0) | (state.bkind == 1)]]
-    nc = state.nc
-    fc = np.hypot(state.cf[C_FX, :nc], state.cf[C_FY, :nc])
-    mags.append(fc[fc > 0])
+    mags = [np.hypot(fx, fy) for _i, _j, fx, fy in pair_forces(state)]
     fq = np.abs(state.qf[Q_FN, :state.nq])
     mags.append(fq[fq > 0])
     allf = np.concatenate(mags)
@@ -83,7 +114,8 @@ def virial_stress(state, mask, area, t=1.0):
 
     σ = (1/(A t)) Σ_pairs w_k l_k ⊗ F_k, with l = x_j − x_i, F the force on j, and weight
     w_k = (mask_i + mask_j)/2, so a pair counts fully when both particles are in the set.
-    Compression positive. Wall contacts are not included: keep the set away from walls.
+    Compression positive. Wall contacts and the shear dashpot force are not included: keep the
+    set away from walls.
 
     Parameters
     ----------
@@ -100,9 +132,7 @@ def virial_stress(state, mask, area, t=1.0):
     x, y = pf[X], pf[Y]
     m = mask.astype(float)
     sig = np.zeros((2, 2))
-    nc = state.nc
-    for i, j, fx, fy in ((state.bi, state.bj, state.bf[BFX], state.bf[BFY]),
-                         (state.ci[:nc], state.cj[:nc], state.cf[C_FX, :nc], state.cf[C_FY, :nc])):
+    for i, j, fx, fy in pair_forces(state):
         wgt = 0.5 * (m[i] + m[j])
         lx, ly = x[j] - x[i], y[j] - y[i]
         sig[0, 0] += np.sum(wgt * lx * fx)

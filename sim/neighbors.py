@@ -158,36 +158,6 @@ def build_contacts(x, y, r, skin, sj_ptr, sj_adj, old_start, old_cj, old_fs, cst
     return total
 
 
-@njit
-def build_gather(n, pi, pj, m, ptr, ref):
-    """Per-particle CSR of pair references ``2k + side`` (side 1 when the particle is j).
-
-    Parameters
-    ----------
-    n : int
-        Particles.
-    pi, pj : (>= m,) int32
-        Pairs; only the first ``m`` are used.
-    ptr : (N+1,) int64, written
-    ref : (>= 2m,) int64, written
-    """
-    for p in range(n + 1):
-        ptr[p] = 0
-    for k in range(m):
-        ptr[pi[k] + 1] += 1
-        ptr[pj[k] + 1] += 1
-    for p in range(n):
-        ptr[p + 1] += ptr[p]
-    pos = ptr[:-1].copy()
-    for k in range(m):
-        a = pi[k]
-        ref[pos[a]] = 2 * k
-        pos[a] += 1
-        b = pj[k]
-        ref[pos[b]] = 2 * k + 1
-        pos[b] += 1
-
-
 def partner_csr(n, pi, pj):
     """CSR (ptr, adj) of the partners of every particle for the pairs ``(pi, pj)`` (numpy)."""
     a = np.concatenate([pi, pj]).astype(np.int64)

@@ -20,7 +20,7 @@ from .cracks import CrackLog, crack_records
 from .errors import InputError
 from .integrate import critical_timestep, run_steps
 from .measure import energies, unbalanced_ratio, virial_stress
-from .neighbors import build_contacts, build_gather, partner_csr
+from .neighbors import build_contacts, partner_csr
 from .specimen import Specimen
 from .state import (ARI, BRK_NX, BRK_NY, BRK_STEP, BRK_X, BRK_Y, C_CN, C_CS, C_FS, C_KN, C_KS,
                     C_MU, COHA, FIX_ROTATION, FIX_X, FIX_Y, FM, FRIC, FVX, FVY, FW, FX, FY,
@@ -167,19 +167,15 @@ class Simulation:
         bf[NJX, sj] = jx * flip
         bf[NJY, sj] = jy * flip
         bf[BRK_STEP] = -1
-        bptr = np.zeros(n + 1, np.int64)
-        bref = np.zeros(max(2 * nb, 1), np.int64)
-        build_gather(n, bi, bj, nb, bptr, bref)
         sj_ptr, sj_adj = partner_csr(n, bi[sj], bj[sj])
         cap = 0
         return State(pf=pf, fix=np.zeros(n, np.int8), mineral=sp.mineral.copy(),
-                     grain=sp.grain.copy(), bf=bf, bmom=np.zeros(2 * nb), bi=bi, bj=bj,
+                     grain=sp.grain.copy(), bf=bf, bi=bi, bj=bj,
                      bkind=bkind, bstate=np.zeros(nb, np.int8), bid=order.astype(np.int64),
-                     bptr=bptr, bref=bref, sj_ptr=sj_ptr, sj_adj=sj_adj,
+                     sj_ptr=sj_ptr, sj_adj=sj_adj,
                      cf=np.zeros((NCF, cap)), ci=np.zeros(cap, np.int32),
                      cj=np.zeros(cap, np.int32), cstart=np.zeros(n + 1, np.int64),
-                     cmom=np.zeros(2 * cap), cptr=np.zeros(n + 1, np.int64),
-                     cref=np.zeros(2 * cap, np.int64), wf=np.zeros((0, NWF)),
+                     wf=np.zeros((0, NWF)),
                      qf=np.zeros((NQF, 0)), qp=np.zeros(0, np.int32), qw=np.zeros(0, np.int32),
                      logged=np.zeros(nb, bool), nc=0, nq=0, npb=npb)
 
@@ -218,14 +214,7 @@ class Simulation:
         cf[C_KN, :nc], cf[C_KS, :nc] = linear_stiffness(pf[R][i], pf[R][j], sp.emod[mi],
                                                         sp.emod[mj], kr, t)
         cf[C_MU, :nc] = np.minimum(sp.fric[mi], sp.fric[mj])
-        cref = np.zeros(2 * cap, np.int64)
-        cptr = np.zeros(n + 1, np.int64)
-        build_gather(n, ci, cj, nc, cptr, cref)
-        st.cf, st.ci, st.cj, st.cstart, st.cptr, st.cref, st.nc = cf, ci, cj, cstart, cptr, cref, nc
-        if st.cmom.size != 2 * cap:
-            st.cmom = np.zeros(2 * cap)
-        else:
-            st.cmom[:] = 0.0
+        st.cf, st.ci, st.cj, st.cstart, st.nc = cf, ci, cj, cstart, nc
         # walls
         qp, qw = wall_candidates(pf[X], pf[Y], pf[R], st.wf, self.skin)
         qf = np.zeros((NQF, qp.size))
@@ -328,9 +317,8 @@ class Simulation:
             done, status = run_steps(
                 left, step0, dt, self.damping, nch, self.skin, config.MAX_STEP_DISPLACEMENT,
                 config.MAX_OVERLAP, config.THICKNESS, config.SERVO_ALPHA, st.pf, st.fix, st.bi,
-                st.bj, st.bstate, st.bf, st.bmom, st.bptr, st.bref, st.npb, st.ci, st.cj, st.cf,
-                st.cmom, st.cptr, st.cref, st.nc, use_dash, st.wf, st.qp, st.qw, st.qf, st.nq,
-                self._refresh, info)
+                st.bj, st.bstate, st.bf, st.npb, st.ci, st.cj, st.cf, st.nc, use_dash, st.wf,
+                st.qp, st.qw, st.qf, st.nq, st.acc, self._refresh, info)
             self._refresh = False
             self.step += int(done)
             self.time += int(done) * dt

@@ -12,11 +12,10 @@ from __future__ import annotations
 import numpy as np
 
 # --- particle float table pf[row, p] -------------------------------------------------------
-X, Y, VX, VY, W, FX, FY, FM, R, INVM, INVI, X0, Y0, FVX, FVY, FW, WFX, WFY, WFM, MASS, INERTIA = \
-    range(21)
-NPF = 21
+X, Y, VX, VY, W, FX, FY, FM, R, INVM, INVI, X0, Y0, FVX, FVY, FW, MASS, INERTIA = range(18)
+NPF = 18
 PF_NAMES = ("x", "y", "vx", "vy", "w", "fx", "fy", "fm", "r", "invm", "invi", "x0", "y0",
-            "fvx", "fvy", "fw", "wfx", "wfy", "wfm", "mass", "inertia")
+            "fvx", "fvy", "fw", "mass", "inertia")
 
 # particle fix flags (int8): bit 0 vx prescribed, bit 1 vy prescribed, bit 2 rotation prescribed
 FIX_X = 1
@@ -24,13 +23,14 @@ FIX_Y = 2
 FIX_ROTATION = 4
 
 # --- bond float table bf[row, b] ------------------------------------------------------------
-(FN, FS, MB, KNA, KSA, KNI, ARI, TENA, COHA, TANFA, NJX, NJY, UN, FRIC, TANDIL, BFX, BFY,
- SIZE, BRK_X, BRK_Y, BRK_NX, BRK_NY, BRK_STEP) = range(23)
-NBF = 23
+(FN, FS, MB, KNA, KSA, KNI, ARI, TENA, COHA, TANFA, NJX, NJY, UN, FRIC, TANDIL, SIZE, BRK_X,
+ BRK_Y, BRK_NX, BRK_NY, BRK_STEP) = range(21)
+NBF = 21
+
 
 # --- contact float table cf[row, c] ---------------------------------------------------------
-C_FS, C_KN, C_KS, C_MU, C_CN, C_CS, C_FX, C_FY, C_FN = range(9)
-NCF = 9
+C_FS, C_KN, C_KS, C_MU, C_CN, C_CS, C_FN = range(7)
+NCF = 7
 
 # --- wall table wf[w, col] ------------------------------------------------------------------
 (W_PX, W_PY, W_NX, W_NY, W_VX, W_VY, W_FRIC, W_EMOD, W_FX, W_FY, W_SERVO, W_TARGET, W_LENGTH,
@@ -42,33 +42,45 @@ Q_FS, Q_KN, Q_KS, Q_MU, Q_FN = range(5)
 NQF = 5
 
 
+def max_threads() -> int:
+    """Number of force-buffer rows: numba's thread-pool size."""
+    import numba
+    return int(numba.config.NUMBA_NUM_THREADS)
+
+
 class State:
     """All arrays of a running simulation (no formulas; kernels do the work).
 
     Attributes
     ----------
-    pf : (21, N) ndarray of float64
+    pf : (18, N) ndarray of float64
         Particle table, rows ``X, Y, VX, ...`` (see module constants).
     fix, mineral, grain : (N,) ndarray of int8, int32, int32
-    bf : (23, B) ndarray of float64
-        Bond table; ``bmom`` (2B,) holds the moments on particle i (2b) and j (2b + 1).
+    bf : (21, B) ndarray of float64
+        Bond table (forces, moments, constants, break records).
     bi, bj : (B,) int32; bkind, bstate : (B,) int8; bid : (B,) int64
         Pairs, kind (0 pb, 1 sj), state (0 intact, 1 tension, 2 shear), specimen bond index.
-    bptr, bref : CSR gather of bonds per particle (ref = 2b + side, side 1 when p is j).
-    cf : (9, C) float64; ci, cj : (C,) int32; cstart : (N+1,) int64; nc : int
+    sj_ptr, sj_adj : CSR of smooth-joint partners (excluded from the contact list).
+    cf : (7, C) float64; ci, cj : (C,) int32; cstart : (N+1,) int64; nc : int
         Contact table, pairs and owner index (contacts of i are cstart[i]:cstart[i+1]).
-    cptr, cref, cmom : CSR gather of contacts and the contact moments (2C,).
+    acc : (T, 4N) ndarray of float64
+        Per-thread force buffers, ``acc[t, 4p:4p+3]`` = (fx, fy, moment); between calls row 0
+        holds the force at the current positions and the other rows are zero (rebuilt from
+        fx, fy, fm on load, so not saved).
     wf : (W, 17) float64; qf : (5, Q) float64; qp, qw : (Q,) int32; nq : int
         Walls and wall contacts.
     """
 
-    ARRAYS = ("pf", "fix", "mineral", "grain", "bf", "bmom", "bi", "bj", "bkind", "bstate",
-              "bid", "bptr", "bref", "sj_ptr", "sj_adj", "cf", "ci", "cj", "cstart", "cmom",
-              "cptr", "cref", "wf", "qf", "qp", "qw", "logged")
+    ARRAYS = ("pf", "fix", "mineral", "grain", "bf", "bi", "bj", "bkind", "bstate", "bid",
+              "sj_ptr", "sj_adj", "cf", "ci", "cj", "cstart", "wf", "qf", "qp", "qw", "logged")
 
     def __init__(self, **arrays):
         for k in self.ARRAYS:
             setattr(self, k, arrays[k])
+        self.acc = np.zeros((max_threads(), 4 * self.pf.shape[1]))
+        self.acc[0, 0::4] = self.pf[FX]
+        self.acc[0, 1::4] = self.pf[FY]
+        self.acc[0, 2::4] = self.pf[FM]
         self.nc = int(arrays.get("nc", 0))
         self.nq = int(arrays.get("nq", 0))
         self.npb = int(arrays.get("npb", 0))

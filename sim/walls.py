@@ -15,12 +15,12 @@ from .state import (W_DISP, W_FX, W_FY, W_GAIN, W_KTOT, W_LENGTH, W_NX, W_NY, W_
 
 
 @njit
-def wall_forces(dt, x, y, vx, vy, w, r, wfx, wfy, wfm, wf, qp, qw, nq, qfs, qkn, qks, qmu, qfn):
+def wall_forces(dt, x, y, vx, vy, w, r, acc, wf, qp, qw, nq, qfs, qkn, qks, qmu, qfn):
     """Wall contacts and wall forces for one step (serial; W and Q are small).
 
     ``dt`` only scales the shear increment (0 re-evaluates the forces without motion).
-    Writes the per-particle wall forces ``wfx, wfy, wfm`` of the particles in the wall-contact
-    list, the shear history ``qfs`` and normal force ``qfn`` of each wall contact, and the wall
+    Adds the wall forces on the particles to the force buffer ``acc`` (``acc[4p:4p+3]``), writes
+    the shear history ``qfs`` and normal force ``qfn`` of each wall contact, and the wall
     table columns W_FX, W_FY (force by the particles on the wall) and W_KTOT.
 
     Returns
@@ -35,11 +35,6 @@ def wall_forces(dt, x, y, vx, vy, w, r, wfx, wfy, wfm, wf, qp, qw, nq, qfs, qkn,
         wf[k, W_FX] = 0.0
         wf[k, W_FY] = 0.0
         wf[k, W_KTOT] = 0.0
-    for q in range(nq):
-        p = qp[q]
-        wfx[p] = 0.0
-        wfy[p] = 0.0
-        wfm[p] = 0.0
     worst = 0.0
     qworst = -1
     for q in range(nq):
@@ -62,9 +57,9 @@ def wall_forces(dt, x, y, vx, vy, w, r, wfx, wfy, wfm, wf, qp, qw, nq, qfs, qkn,
         qfn[q] = fn
         fx = fn * nx - fs * ny
         fy = fn * ny + fs * nx
-        wfx[p] += fx
-        wfy[p] += fy
-        wfm[p] += -a * fs
+        acc[4 * p] += fx
+        acc[4 * p + 1] += fy
+        acc[4 * p + 2] -= a * fs
         wf[k, W_FX] -= fx
         wf[k, W_FY] -= fy
         wf[k, W_KTOT] += qkn[q]

@@ -6,6 +6,7 @@ import pytest
 
 from sim import Simulation, Specimen, config
 from sim.measure import lattice_elastic
+from sim.state import C_FN
 
 R = 1e-3
 EBAR, KBAR = 50e9, 2.0
@@ -110,4 +111,4 @@ def test_linear_plus_bond_under_isotropic_precompression():
     assert e_sim == pytest.approx(e_ref, rel=config.TOL_LATTICE_MODULUS)
     assert nu_sim == pytest.approx(nu_ref, rel=config.TOL_LATTICE_MODULUS)
     # every ball-ball contact stayed closed
-    assert np.all(sim.state.cf[8, :sim.state.nc] > 0)
+    assert np.all(sim.state.cf[C_FN, :sim.state.nc] > 0)

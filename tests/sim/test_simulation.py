@@ -4,6 +4,7 @@ import pytest
 from _sim_fixtures import disks
 
 from sim import InputError, InstabilityError, Simulation, Specimen, config
+from sim.state import KNA
 
 
 def test_undamped_lattice_energy_drift_at_default_step(rng):
@@ -67,7 +68,7 @@ def test_sixty_to_one_stiffness_contrast_is_stable_at_default_step(rng):
     s = Specimen.random_packing(1200, n_minerals=2, emod=[1e9, 61e9], pb_emod=[1e9, 61e9],
                                 overlap=-0.05, bond_gap=0.3, seed=5)
     sim = Simulation(s, damping=0.0)
-    ks = sim.state.bf[3, : sim.state.npb]
+    ks = sim.state.bf[KNA, : sim.state.npb]
     assert ks.max() / ks.min() > 30
     n = sim.n_particles
     sim.set_velocity(np.arange(n), rng.normal(0, 1e-3, n), rng.normal(0, 1e-3, n))

@@ -6,6 +6,7 @@ import pytest
 
 from sim import Simulation, config
 from sim.measure import collision_reference
+from sim.state import C_KN
 
 from _sim_fixtures import disks
 
@@ -43,7 +44,7 @@ def _collide(beta):
 def test_two_disk_collision(beta):
     tc, e, peak, sim = _collide(beta)
     # k_n by the deformability method: A E*/L with A = 2 R t, L = 2R -> E* t
-    assert sim.state.cf[1, 0] == pytest.approx(KN, rel=1e-12)
+    assert sim.state.cf[C_KN, 0] == pytest.approx(KN, rel=1e-12)
     tc_ref, e_ref, peak_ref = collision_reference(M1, M2, KN, V0, beta)
     assert tc == pytest.approx(tc_ref, rel=config.TOL_COLLISION_DURATION)
     assert e == pytest.approx(e_ref, rel=config.TOL_RESTITUTION)

@@ -87,5 +87,6 @@ def test_inclined_joint_slides_at_mu_fn_along_joint_plane(fric):
     # the force on particle 1 lies in the joint frame: Fn nj + Fs tj
     fx, fy = sim.group_force([1])
     np.testing.assert_allclose([fx, fy], fn0 * nj + fss[-1] * tj, rtol=1e-9)
-    # zero cohesion: the bonded joint failed in shear first, then slid (unbonded law)
-    assert sim.cracks.counts()["sj_shear"] == 1
+    # zero tensile strength: the joint is broken (unbonded) from its installation, step 0
+    assert sim.cracks.counts()["sj_tension"] == 1
+    assert sim.cracks.to_frame()["step"].tolist() == [0]
