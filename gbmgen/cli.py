@@ -1,4 +1,4 @@
-"""``gbmgen build | info | plot | defect | export``: command-line interface (no maths here).
+"""``gbmgen build | run | info | plot | defect | export``: command-line interface (no maths here).
 
 Exit codes: 0 ok, 2 bad input (one line on stderr naming the file or field).
 """
@@ -28,16 +28,8 @@ def _table_path(name):
     return name
 
 
-def _parser():
-    p = argparse.ArgumentParser(prog="gbmgen", description="Grain-based model generator: "
-                                "grain-size table -> bonded grain-based specimen.npz")
-    p.add_argument("--version", action="version", version=f"gbmgen {__version__}")
-    sub = p.add_subparsers(dest="command", required=True)
-
-    b = sub.add_parser("build", help="build a specimen.npz from a grain-size table")
-    b.add_argument("--config", metavar="FILE.yaml",
-                   help="YAML mapping of option names (as below, - or _) to values")
-    b.add_argument("--table", help="grains.csv (DESIGN.md §4), or 'table-4-1' (thesis example)")
+def _add_model_options(b):
+    """Options shared by build and run (size scenario, tessellation, particles, params)."""
     b.add_argument("--scenario", type=int, default=1, choices=(1, 2, 3, 4),
                    help="size range: 1 full, 2 10-90%% passing, 3 mean±½mean, 4 mean±¼mean")
     b.add_argument("--scale", type=float, default=1.0, help="grain-size factor (e.g. 1.5)")
@@ -48,10 +40,6 @@ def _parser():
     b.add_argument("--tessellation", choices=("laguerre", "voronoi"), default="laguerre")
     b.add_argument("--no-fit-areas", dest="fit_areas", action="store_false",
                    help="Laguerre with weights r^2 only (no area fit)")
-    b.add_argument("--shape", choices=("hexagon", "rectangle", "shield"),
-                   help="controlled tessellation instead of seeds (thesis Ch. 5)")
-    b.add_argument("--slenderness", type=float, default=1.0, help="H/W of controlled grains")
-    b.add_argument("--grain-area-mm2", type=float, default=config.GRAIN_AREA_MM2)
     b.add_argument("--particle-radius-mm", type=float, default=config.PARTICLE_RADIUS_MM,
                    help="mean particle radius [%(default)s]")
     b.add_argument("--radius-ratio", type=float, default=config.RADIUS_RATIO)
@@ -62,12 +50,43 @@ def _parser():
                    help="thesis-ch4 | thesis-ch5 | FILE.yaml/json [%(default)s]")
     b.add_argument("--seed", type=int, default=None,
                    help="random seed (default: drawn and recorded in meta)")
+
+
+def _parser():
+    p = argparse.ArgumentParser(prog="gbmgen", description="Grain-based model generator: "
+                                "grain-size table -> bonded grain-based specimen.npz")
+    p.add_argument("--version", action="version", version=f"gbmgen {__version__}")
+    sub = p.add_subparsers(dest="command", required=True)
+
+    b = sub.add_parser("build", help="build a specimen.npz from a grain-size table")
+    b.add_argument("--config", metavar="FILE.yaml",
+                   help="YAML mapping of option names (as below, - or _) to values")
+    b.add_argument("--table", help="grains.csv (DESIGN.md §4), or 'table-4-1' (thesis example)")
+    _add_model_options(b)
+    b.add_argument("--shape", choices=("hexagon", "rectangle", "shield"),
+                   help="controlled tessellation instead of seeds (thesis Ch. 5)")
+    b.add_argument("--slenderness", type=float, default=1.0, help="H/W of controlled grains")
+    b.add_argument("--grain-area-mm2", type=float, default=config.GRAIN_AREA_MM2)
     b.add_argument("--out", required=True, help="specimen.npz to write")
     b.add_argument("--geom", help="also write the PFC geometry file")
     b.add_argument("--vtk", metavar="PREFIX", help="also write PREFIX_particles/_grains.vtk")
     b.add_argument("--png", help="also write a PNG preview")
     b.add_argument("--json", action="store_true", help="print the summary as JSON")
     b.add_argument("--no-progress", action="store_true", help="print no stage lines")
+
+    r = sub.add_parser("run", help="SEM images -> semkit grains.csv -> specimen.npz (end to end)")
+    r.add_argument("images", nargs="?", default="sample_images",
+                   help="folder of SEM images [%(default)s]")
+    r.add_argument("--out", required=True, help="output folder")
+    r.add_argument("--minerals", default="pyroxene,plagioclase,biotite",
+                   help="mineral names brightest-first (semkit) [%(default)s]")
+    r.add_argument("--classes", help="class edges in um for grains.csv, e.g. 20,140")
+    r.add_argument("--pixel-size-um", type=float, help="fallback pixel size for semkit")
+    r.add_argument("--no-cracks", dest="cracks", action="store_false",
+                   help="skip semkit's crack pipeline (grains only)")
+    r.add_argument("--jobs", type=int, help="semkit worker processes")
+    r.add_argument("--no-progress", action="store_true")
+    _add_model_options(r)
 
     i = sub.add_parser("info", help="summary of a specimen.npz (counts, fidelity)")
     i.add_argument("specimen")
@@ -218,6 +237,19 @@ def _build(a):
     return 0
 
 
+def _run(a):
+    from .run import run
+    summary = run(a.images, a.out, minerals=a.minerals, classes=a.classes,
+                  pixel_size_um=a.pixel_size_um, cracks=a.cracks, jobs=a.jobs,
+                  progress=not a.no_progress, seed=a.seed, scenario=a.scenario, scale=a.scale,
+                  model_scale=a.model_scale, width_mm=a.width_mm, height_mm=a.height_mm,
+                  tessellation=a.tessellation, fit_areas=a.fit_areas,
+                  particle_radius_mm=a.particle_radius_mm, radius_ratio=a.radius_ratio,
+                  porosity=a.porosity, bond_gap_mm=a.bond_gap_mm, params=a.params)
+    print(json.dumps(summary, indent=1))
+    return 0
+
+
 def _defect(a, spec):
     from . import defects
     box = spec.box
@@ -261,6 +293,8 @@ def main(argv=None) -> int:
         a = parser.parse_args(argv)
         if a.command == "build":
             return _build(a)
+        if a.command == "run":
+            return _run(a)
         spec = _load(a.specimen)
         if a.command == "info":
             if a.json:
