@@ -350,3 +350,69 @@ def label_extent(labels, n_labels, cos_t, sin_t, pmin, pmax):
                 pmin[k] = p
             if p > pmax[k]:
                 pmax[k] = p
+
+
+@njit
+def fill_background(img, known, rows, cols, n_rings, band, out):
+    """Fill the grey level under excluded (dark) pixels from their known neighbours, in place.
+
+    Parameters
+    ----------
+    img : (H, W) float32
+        Grey image.
+    known : (H, W) uint8
+        1 where the pixel's own grey is background; pixels filled here are set to 1.
+    rows, cols : (K,) int64
+        The excluded pixels (known == 0), none on the image border.
+    n_rings : int
+        Rings filled inward from the known pixels.
+    band : float
+        Of the known 3 x 3 neighbours, those within ``band`` of the darkest are averaged: at a
+        phase boundary the rim of a crack thus takes the grey of one phase, never a mix.
+    out : (H, W) float32
+        Receives the filled values at the filled pixels (others untouched).
+
+    Returns
+    -------
+    n_left : int
+        Excluded pixels still unfilled after ``n_rings`` rings.
+    """
+    k = rows.shape[0]
+    done = np.zeros(k, np.bool_)
+    newv = np.empty(k, np.float32)
+    for _ in range(n_rings):
+        n_new = 0
+        for p in range(k):
+            newv[p] = np.float32(np.nan)
+            if done[p]:
+                continue
+            i = rows[p]
+            j = cols[p]
+            m = np.float32(1e30)
+            for di in range(-1, 2):
+                for dj in range(-1, 2):
+                    if known[i + di, j + dj] and out[i + di, j + dj] < m:
+                        m = out[i + di, j + dj]
+            if m >= 1e30:
+                continue
+            s = 0.0
+            c = 0
+            for di in range(-1, 2):
+                for dj in range(-1, 2):
+                    if known[i + di, j + dj] and out[i + di, j + dj] <= m + band:
+                        s += out[i + di, j + dj]
+                        c += 1
+            newv[p] = s / c
+            n_new += 1
+        if n_new == 0:
+            break
+        for p in range(k):
+            if not done[p] and newv[p] == newv[p]:
+                out[rows[p], cols[p]] = newv[p]
+                known[rows[p], cols[p]] = 1
+                done[p] = True
+    n_left = 0
+    for p in range(k):
+        if not done[p]:
+            n_left += 1
+    return n_left

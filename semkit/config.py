@@ -31,15 +31,21 @@ AUTO_AREA_FRACTION = 0.5
 #: `auto`: thin cracks never reach the midpoint once blurred, so objects are *detected* at a
 #: weaker level (fraction of the contrast, and at least AUTO_DETECT_SIGMAS noise sigmas deep)
 #: and kept when they hold a *seed* pixel (hysteresis); area is still counted at the midpoint.
-AUTO_DETECT_FRACTION = 0.3
+AUTO_DETECT_FRACTION = 0.27
 AUTO_DETECT_SIGMAS = 4.0
-AUTO_SEED_FRACTION = 0.4
+AUTO_SEED_FRACTION = 0.33
 AUTO_SEED_SIGMAS = 6.0
 #: when no crack is wide enough to show its core grey, the core is taken as this share of the
 #: darkest mineral's grey at most (BSE: epoxy/void is near black).
 THIN_ONLY_CRACK_RATIO = 0.3
 #: box size (px) of the normalised convolution that estimates the local background of cracks.
 LOCAL_BACKGROUND_BOX_PX = 9
+#: background of an excluded pixel: mean of its known neighbours within this many noise
+#: sigmas of the darkest one (one phase, never a mix across a phase boundary).
+BACKGROUND_BAND_SIGMAS = 4.0
+#: a narrow dark line (grey closing minus image) deeper than this share of the contrast is a
+#: crack candidate (thin cracks ~0.4 once blurred; faint grain boundaries ~0.15).
+CANDIDATE_LINE_FRACTION = 0.25
 #: Gaussian pre-smoothing (px) of the grey image before thresholding (denoise, not despeckle).
 DENOISE_SIGMA_PX = 0.7
 #: a threshold that puts more than this share of the image in the dark class is suspect.

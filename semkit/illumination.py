@@ -28,6 +28,26 @@ def _poly_terms(u, v, degree):
     return [u ** i * v ** j for i in range(degree + 1) for j in range(degree + 1 - i)]
 
 
+def _phase_offsets(r, keep):
+    """Log-grey level of the phase (mineral) each pixel belongs to: peaks of the residual
+    histogram, each pixel assigned to the nearest. Without this, a region rich in a bright
+    mineral would pass for a brightly lit one."""
+    from scipy.ndimage import gaussian_filter1d
+    from scipy.signal import find_peaks
+    v = r[keep]
+    lo, hi = np.percentile(v, [0.5, 99.5])
+    if hi - lo < 1e-6:
+        return np.zeros_like(r)
+    h, e = np.histogram(v, bins=64, range=(lo, hi))
+    hs = gaussian_filter1d(h.astype(float), 1.5)
+    pk, _ = find_peaks(np.r_[0.0, hs, 0.0], prominence=0.05 * hs.max())
+    c = 0.5 * (e[1:] + e[:-1])[pk - 1]
+    if c.size <= 1:
+        return np.zeros_like(r)
+    idx = np.argmin(np.abs(r[:, None] - c[None, :]), axis=1)
+    return c[idx] - np.median(c)
+
+
 def illumination_field(image, *, method="polynomial", degree=config.FLATTEN_POLY_DEGREE,
                        fit_size_px=config.FLATTEN_FIT_SIZE_PX):
     """Estimate the smooth multiplicative illumination field of an image.
@@ -38,8 +58,9 @@ def illumination_field(image, *, method="polynomial", degree=config.FLATTEN_POLY
         Grey image, cracks dark.
     method : {"polynomial", "gaussian"}
         ``polynomial``: least-squares fit of a 2-D polynomial of ``degree`` to log(grey) on
-        the shrunken image, refitted twice without the dark outliers (cracks, pores) — robust
-        to the grain mosaic, which averages out. ``gaussian``: grey closing (removes cracks)
+        the shrunken image, refitted without the dark outliers (cracks, pores) and with each
+        pixel's mineral level (a peak of the residual histogram) taken out, so that a region
+        rich in a bright mineral does not pass for a brightly lit one. ``gaussian``: grey closing (removes cracks)
         then a Gaussian of sigma ``FLATTEN_GAUSS_FRACTION`` x the short side (rolling-ball-like).
     degree : int
     fit_size_px : int
@@ -62,10 +83,15 @@ def illumination_field(image, *, method="polynomial", degree=config.FLATTEN_POLY
         a = np.column_stack(_poly_terms(u, v, degree))
         y = np.log(np.maximum(small.ravel().astype(np.float64), 1.0))
         keep = np.ones(y.size, bool)
-        for _ in range(3):  # normal equations: 6 unknowns, a few thousand rows
+        offset = np.zeros(y.size)
+        for it in range(5):  # normal equations: 6 unknowns, a few thousand rows
             ak = a[keep]
-            coef = np.linalg.solve(ak.T @ ak + 1e-9 * np.eye(a.shape[1]), ak.T @ y[keep])
+            coef = np.linalg.solve(ak.T @ ak + 1e-9 * np.eye(a.shape[1]),
+                                   ak.T @ (y - offset)[keep])
             r = y - a @ coef
+            if it >= 1:  # the grain mosaic: subtract each pixel's phase level (log grey)
+                offset = _phase_offsets(r, keep)
+                r = r - offset
             s = 1.4826 * np.median(np.abs(r[keep] - np.median(r[keep]))) + 1e-6
             keep = r > -2.5 * s
         # evaluate on a coarse grid (the field is smooth) and resize

@@ -172,7 +172,8 @@ def dark_class_levels(image) -> DarkLevels:
         peaks = np.array([int(np.argmax(hcs))])
     bounds = [0] + [int(peaks[i] + np.argmin(hcs[peaks[i]:peaks[i + 1] + 1]))
                     for i in range(len(peaks) - 1)] + [len(hcs)]
-    mass = np.array([hcs[bounds[i]:bounds[i + 1]].sum() for i in range(len(peaks))]) / hcs.sum()
+    mass = np.array([hcs[bounds[i]:bounds[i + 1]].sum() for i in range(len(peaks))]) / max(
+        hcs.sum(), 1e-12)
     major = np.flatnonzero(mass >= config.MINERAL_MIN_FRACTION)
     q = int(major[0]) if major.size else int(np.argmax(mass))
     # refine on the image's own histogram: the local maximum near the closed-image peak
@@ -212,23 +213,40 @@ def dark_class_levels(image) -> DarkLevels:
     return DarkLevels(mineral, float(sigma), crack, float(seed), n_dark)
 
 
-def _local_background(img, exclude, size):
-    """Mean of the non-excluded pixels in a ``size`` box (normalised convolution); where a box
-    holds too few of them (inside wide dark areas) a box 4x larger is used."""
+def _local_background(img, exclude, size, band, n_rings=4):
+    """Grey level the image would have without the excluded (dark) pixels.
+
+    Known pixels keep their own value. Excluded pixels are filled ring by ring from their known
+    3 x 3 neighbours (``n_rings`` rings; :func:`semkit._kernels.fill_background`): of those
+    neighbours, the ones within ``band`` of the darkest are averaged, so next to a phase
+    boundary the rim of a crack, or the boundary line itself, takes the grey of one phase —
+    a plain box mean would mix a dark and a bright mineral and make the dark one look like
+    crack. Pixels deeper than ``n_rings`` (inside wide cracks, where the decision does not
+    depend on it) get the normalised box mean over ``size`` (4 x ``size`` where that is empty).
+    """
     import cv2
-    wgt = (~exclude).astype(np.float32)
-    iw = img * wgt
-    k = (int(size), int(size))
-    num = cv2.blur(iw, k, borderType=cv2.BORDER_REFLECT)
-    den = cv2.blur(wgt, k, borderType=cv2.BORDER_REFLECT)
-    bg = num / np.maximum(den, 1e-6)
-    weak = den < 0.05
-    if weak.any():
-        k4 = (4 * int(size) + 1, 4 * int(size) + 1)
-        num2 = cv2.blur(iw, k4, borderType=cv2.BORDER_REFLECT)
-        den2 = cv2.blur(wgt, k4, borderType=cv2.BORDER_REFLECT)
-        bg[weak] = num2[weak] / np.maximum(den2[weak], 1e-6)
-    return bg
+    from . import _kernels
+    h, w = img.shape
+    pad = lambda a, v: np.pad(a, 1, mode="constant", constant_values=v)  # noqa: E731
+    known = pad((~exclude).astype(np.uint8), 0)
+    out = pad(np.ascontiguousarray(img, np.float32), 0.0)
+    rr, cc = np.nonzero(known[1:-1, 1:-1] == 0)
+    _kernels.fill_background(out, known, (rr + 1).astype(np.int64), (cc + 1).astype(np.int64),
+                             int(n_rings), float(band), out)
+    val = out[1:-1, 1:-1]
+    rest = known[1:-1, 1:-1] == 0
+    if rest.any():
+        wgt = (~exclude).astype(np.float32)
+        iw = img * wgt
+        for k in (int(size), 4 * int(size) + 1):
+            num = cv2.blur(iw, (k, k), borderType=cv2.BORDER_REFLECT)
+            den = cv2.blur(wgt, (k, k), borderType=cv2.BORDER_REFLECT)
+            ok = rest & (den > 0.02)
+            val[ok] = num[ok] / den[ok]
+            rest &= ~ok
+        if rest.any():
+            val[rest] = float(np.median(img[~exclude])) if (~exclude).any() else float(img.max())
+    return np.ascontiguousarray(val)
 
 
 def noise_sigma(image) -> float:
@@ -263,11 +281,17 @@ def threshold_auto(image, *, area_fraction=config.AUTO_AREA_FRACTION,
         m = np.zeros(img.shape, bool)
         return ThresholdResult(m, m, "auto", lv.seed, 0.0, True, "no dark class")
     sn = noise_sigma(img)
-    # exclude everything that might be crack (incl. its blurred rim) from the background
-    cand = (img < lv.mineral - 3.0 * lv.sigma)
+    # exclude everything that might be crack (incl. its blurred rim) from the background:
+    # darker than the darkest mineral, or a narrow dark line that a grey closing fills in
+    closed = cv2.morphologyEx(img, cv2.MORPH_CLOSE, np.ones((7, 7), np.uint8))
+    line = closed - img
+    cand = (img < lv.mineral - 3.0 * lv.sigma) | (
+        (line > config.AUTO_DETECT_SIGMAS * sn)
+        & (line > config.CANDIDATE_LINE_FRACTION * (closed - lv.crack)))
     cand = cv2.dilate(cand.view(np.uint8), np.ones((5, 5), np.uint8)).view(bool)
-    bg = _local_background(img, cand, config.LOCAL_BACKGROUND_BOX_PX)
-    bg = np.maximum(bg, lv.mineral)  # never below the darkest mineral: a crack cannot be a bg
+    bg = _local_background(img, cand, config.LOCAL_BACKGROUND_BOX_PX,
+                           band=config.BACKGROUND_BAND_SIGMAS * sn)
+    bg = np.maximum(bg, lv.mineral - 3.0 * lv.sigma)  # known pixels are never darker
     contrast = np.maximum(bg - lv.crack, 1e-3)
     depth = bg - img
     area = depth > area_fraction * contrast

@@ -1,0 +1,14 @@
+"""Shared synthetic cases for the semkit tests (cached per session: generation is the slow part)."""
+import functools
+
+from semkit.synth import make_sem_image
+
+SHAPE = (576, 768)
+N_CRACKS = 22
+SEEDS = (11, 12, 13, 14, 15, 16)
+
+
+@functools.lru_cache(maxsize=None)
+def case(seed, gradient=1.0, widths=(2.0, 8.0), stage="pre", shape=SHAPE, n_cracks=N_CRACKS):
+    return make_sem_image(shape, stage=stage, gradient=gradient, widths=widths,
+                          n_cracks=n_cracks, seed=seed)

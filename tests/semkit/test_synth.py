@@ -1,0 +1,96 @@
+"""semkit.synth: seeded synthetic SEM images and their ground truth."""
+import numpy as np
+import pytest
+
+from semkit.synth import make_sem_image
+
+from _synth_cases import case
+
+
+def test_same_seed_same_image_bit_for_bit():
+    a = make_sem_image((96, 128), n_cracks=3, stage="post", gradient=2.0, n_pores=1, seed=5)
+    b = make_sem_image((96, 128), n_cracks=3, stage="post", gradient=2.0, n_pores=1, seed=5)
+    c = make_sem_image((96, 128), n_cracks=3, stage="post", gradient=2.0, n_pores=1, seed=6)
+    assert np.array_equal(a.image, b.image) and np.array_equal(a.crack_labels, b.crack_labels)
+    assert a.cracks.equals(b.cracks)
+    assert not np.array_equal(a.image, c.image)
+
+
+def test_truth_tables_are_consistent():
+    s = case(11)
+    assert s.image.dtype == np.uint8 and s.image.shape == (576, 768)
+    assert s.crack_labels.dtype == np.int32 and s.grain_labels.dtype == np.int32
+    assert s.mineral_labels.dtype == np.int32
+    # labels <-> mask <-> per-crack areas
+    assert np.array_equal(s.crack_mask, s.crack_labels > 0)
+    assert s.cracks["area_px"].sum() == s.crack_mask.sum()
+    counts = np.bincount(s.crack_labels.ravel(), minlength=len(s.cracks) + 1)[1:]
+    assert np.array_equal(counts, s.cracks["area_px"].to_numpy())
+    # grains: ids 1..G cover the image; the table matches the label image
+    g = s.grains
+    assert s.grain_labels.min() == 1 and s.grain_labels.max() == len(g)
+    assert g["area_px"].sum() == s.image.size
+    assert np.allclose(g["eq_diameter_px"], np.sqrt(4 * g["area_px"] / np.pi))
+    # mineral labels follow the grains
+    gm = dict(zip(g["grain_id"], g["mineral_idx"]))
+    assert all(s.mineral_labels[s.grain_labels == k][0] == m for k, m in list(gm.items())[:20])
+    assert set(g["mineral"]) <= set(s.mineral_names)
+
+
+def test_crack_types_by_construction():
+    s = case(12)
+    c = s.cracks
+    assert set(c["type_pre"]) == {"inter", "intra", "trans"}
+    assert (c.loc[c.type_pre == "intra", "n_grains"] == 1).all()
+    assert (c.loc[c.type_pre == "trans", "n_grains"] >= 2).all()
+    # inter cracks run on grain boundaries: their centre pixels are (near) boundary pixels
+    from scipy import ndimage as ndi
+    near_boundary = ndi.binary_dilation(s.boundary_mask, iterations=2)
+    for k in c.loc[c.type_pre == "inter", "crack_id"]:
+        tr = s.traces[k - 1][0]
+        ij = np.round(tr[:, 1::-1]).astype(int)
+        assert near_boundary[ij[:, 0], ij[:, 1]].mean() > 0.9
+    assert (c["type_post"] == "unknown").all()
+
+
+def test_post_stage_morphologies():
+    s = make_sem_image((400, 500), stage="post", n_cracks=24, seed=3)
+    c = s.cracks
+    assert set(c["type_post"]) == {"tensile", "shear", "mixed"}
+    # tensile: one smooth trace per branch, no debris; shear: several narrow traces + debris
+    t, sh = c[c.type_post == "tensile"], c[c.type_post == "shear"]
+    assert (t["debris_px"] == 0).all() and (sh["debris_px"] > 0).all()
+    assert (sh["n_traces"] >= 2).all()
+    for k in sh["crack_id"]:
+        widths = np.concatenate([tr[:, 2] for tr in s.traces[k - 1] if len(tr) > 1])
+        assert widths.max() <= 2.5
+    # length = the drawn centrelines (debris excluded)
+    from semkit.synth import _polylen
+    k = int(t["crack_id"].iloc[0])
+    assert np.isclose(t["length_px"].iloc[0], sum(_polylen(tr) for tr in s.traces[k - 1]))
+
+
+def test_grey_levels_speckles_and_gradient():
+    s = make_sem_image((300, 400), n_cracks=4, widths=(6, 8), gradient=2.5, n_pores=2, seed=9)
+    assert np.isclose(s.illumination.max() / s.illumination.min(), 2.5, rtol=0.01)
+    assert s.speckle_mask.any() and s.pore_mask.any()
+    assert not (s.pore_mask & s.crack_mask).any()
+    flat = s.image / s.illumination
+    # cracks are darker than every mineral; boundaries are faint (not crack-dark)
+    from scipy import ndimage as ndi
+    core = ndi.binary_erosion(s.crack_mask, iterations=2)
+    far = ~ndi.binary_dilation(s.crack_mask | s.speckle_mask | s.pore_mask, iterations=4)
+    assert np.median(flat[core]) < 45
+    assert np.median(flat[s.boundary_mask & far]) > 80
+
+
+def test_bad_arguments():
+    with pytest.raises(ValueError, match="stage"):
+        make_sem_image((64, 64), stage="during")
+    with pytest.raises(ValueError, match="bit_depth"):
+        make_sem_image((64, 64), bit_depth=12)
+
+
+def test_sixteen_bit():
+    s = make_sem_image((64, 80), n_cracks=1, bit_depth=16, seed=1)
+    assert s.image.dtype == np.uint16 and s.image.max() > 255
