@@ -9,14 +9,14 @@ __version__ = "0.1.0"
 
 __all__ = ["InputError", "GrainSizeTable", "read_table", "build_grains", "build_specimen",
            "load_params", "controlled_tessellation", "tessellate", "fidelity_report",
-           "export_geom", "read_geom", "export_vtk", "__version__"]
+           "export_geom", "read_geom", "export_vtk", "run", "__version__"]
 
 _LAZY = {
     "GrainSizeTable": "table", "read_table": "table",
     "build_grains": "build", "build_specimen": "build",
     "load_params": "params", "controlled_tessellation": "controlled",
     "tessellate": "tessellate", "fidelity_report": "fidelity",
-    "export_geom": "export", "read_geom": "export", "export_vtk": "export",
+    "export_geom": "export", "read_geom": "export", "export_vtk": "export", "run": "run",
 }
 
 

@@ -147,12 +147,23 @@ def build_grains(table: GrainSizeTable | None = None, *, width_mm, height_mm, sc
     grains = Grains(xy=xy, offsets=off, mineral=seeds.mineral[sidx], klass=seeds.klass[sidx],
                     seed=sidx)
     timing["tessellation"] = time.perf_counter() - t0
+    compare = None
+    if tessellation == "laguerre":
+        # the same seeds through plain Voronoi, for the fidelity report ("report both")
+        t0 = time.perf_counter()
+        vxy, voff, vidx = tessellate(seeds.x, seeds.y, box)
+        vrep = fidelity_report(scn, polygon_areas(vxy, voff), seeds.mineral[vidx],
+                               seeds.klass[vidx])
+        compare = {"ks": {k: v["ks"] for k, v in vrep["minerals"].items()},
+                   "area_fraction_error_max": vrep["area_fraction_error_max"],
+                   "MHI": vrep["MHI"]}
+        timing["voronoi_comparison"] = time.perf_counter() - t0
     info = {"kind": "tessellation", "tessellation": tessellation,
             "laguerre_weights": ("fitted to target areas" if fit_areas else "seed radius^2")
             if tessellation == "laguerre" else None,
             "weight_fit": fit, "scenario": int(scenario), "scale": float(scale),
             "model_scale": float(model_scale), "n_seeds": int(seeds.x.size),
-            "seed_relaxation": seeds.info,
+            "seed_relaxation": seeds.info, "voronoi_same_seeds": compare,
             "scenario_ranges_mm": {name: [float(v) for v in scn.range_um()[k] / 1000.0]
                                    for k, name in enumerate(scn.minerals)}}
     return BuildResult(grains=grains, table=scn, seeds=seeds, info=info, timing_s=timing)

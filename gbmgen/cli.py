@@ -190,6 +190,11 @@ def _print_summary(spec, out=None):
         for name, v in minerals.items():
             print(f"{name:<14}{v['n_grains']:>8}{v['ks']:>8.4f}{100 * v['area_fraction']:>9.2f}"
                   f"{100 * v['area_fraction_target']:>10.2f}", file=out)
+    vor = ((spec.meta or {}).get("grains") or {}).get("voronoi_same_seeds")
+    if vor:
+        print("Voronoi on the same seeds: KS " + ", ".join(f"{k} {v:.4f}"
+                                                           for k, v in vor["ks"].items())
+              + f"; area-fraction error max {vor['area_fraction_error_max']:.4f}", file=out)
     ppg = s.get("particles_per_grain")
     if ppg:
         print(f"particles per grain: min {ppg['min']} median {ppg['median']:g} "

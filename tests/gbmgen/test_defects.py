@@ -6,8 +6,14 @@ import pytest
 
 from gbmgen.build import build_specimen
 from gbmgen.cli import main
-from gbmgen.defects import (HOLE_KINDS, cut_flaw, cut_holes, double_hole_centres, grains_cut,
-                            place_hole)
+from gbmgen.defects import (
+    HOLE_KINDS,
+    cut_flaw,
+    cut_holes,
+    double_hole_centres,
+    grains_cut,
+    place_hole,
+)
 from gbmgen.errors import InputError
 from sim.specimen import Specimen
 

@@ -70,3 +70,10 @@ def test_other_seed_other_layout_same_statistics():
         assert abs(ra["minerals"][name]["area_fraction"]
                    - rb["minerals"][name]["area_fraction"]) <= config.AREA_FRACTION_TOL
     assert rb["MHI"] == pytest.approx(ra["MHI"], rel=0.03)
+
+
+def test_report_carries_voronoi_on_the_same_seeds():
+    info = full_grains(1).info
+    vor = info["voronoi_same_seeds"]
+    assert min(vor["ks"].values()) >= 0.15
+    assert vor["area_fraction_error_max"] > config.AREA_FRACTION_TOL
