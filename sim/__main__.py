@@ -1,0 +1,4 @@
+"""``python -m sim`` = ``gbmsim``."""
+from .cli import main
+
+raise SystemExit(main())
