@@ -32,7 +32,8 @@ __all__ = ["AnalysisOptions", "CrackAnalysis", "analyse_image", "analyse_file",
 IMAGE_COLUMNS = ["image", "pixel_size_um", "pixel_size_source", "threshold_method",
                  "threshold_value", "n_cracks", "crack_area_um2", "crack_length_um",
                  "area_T_um2", "area_S_um2", "P", "seconds"]
-_EXTRA_IMAGE_COLUMNS = ["threshold_ok", "threshold_note", "n_thin", "n_pores", "pore_area_um2",
+_EXTRA_IMAGE_COLUMNS = ["image_area_um2", "crack_area_fraction", "crack_density_per_mm",
+                        "threshold_ok", "threshold_note", "n_thin", "n_pores", "pore_area_um2",
                         "width_px", "height_px", "flatten", "despeckle", "error"]
 
 
@@ -263,14 +264,20 @@ class CrackAnalysis:
         o = self.objects
         pores = o[o["is_pore"]] if self.options.exclude_pores else o.iloc[:0]
         t = self.thresholded
-        a_t = float(c["area_um2"].sum())
-        a_s = float(self.image.size) * self.pixel_size_um ** 2
+        area = float(c["area_um2"].sum())
+        image_area = float(self.image.size) * self.pixel_size_um ** 2
+        nan = float("nan")
+        # area_T/area_S/P (tensile and shear crack areas, P = A_T/A_S, Equ. 3-1) need the crack
+        # types: they stay NaN here and are filled by the classification stage (issue #3).
         return dict(image=self.name, pixel_size_um=self.pixel_size_um,
                     pixel_size_source=self.pixel_size_source, threshold_method=t.method,
-                    threshold_value=t.value, n_cracks=int(len(c)), crack_area_um2=a_t,
+                    threshold_value=t.value, n_cracks=int(len(c)), crack_area_um2=area,
                     crack_length_um=float(c["length_um"].sum()) if self.options.length
-                    else float("nan"),
-                    area_T_um2=a_t, area_S_um2=a_s, P=a_t / a_s, seconds=float("nan"),
+                    else nan,
+                    area_T_um2=nan, area_S_um2=nan, P=nan, seconds=nan,
+                    image_area_um2=image_area, crack_area_fraction=area / image_area,
+                    crack_density_per_mm=(float(c["length_um"].sum()) / image_area * 1e3
+                                          if self.options.length else nan),
                     threshold_ok=bool(t.ok), threshold_note=t.note,
                     n_thin=int(c["thin"].sum()), n_pores=int(len(pores)),
                     pore_area_um2=float(pores["area_um2"].sum()),

@@ -52,7 +52,7 @@ def test_pixel_size_scales_lengths_and_areas():
     a2 = analyse_image(s.image, pixel_size_um=2.5).summary()
     assert a2["crack_length_um"] == pytest.approx(2.5 * a1["crack_length_um"])
     assert a2["crack_area_um2"] == pytest.approx(6.25 * a1["crack_area_um2"])
-    assert a2["P"] == pytest.approx(a1["P"])
+    assert a2["crack_area_fraction"] == pytest.approx(a1["crack_area_fraction"])
 
 
 def test_one_pixel_cracks_measured_or_flagged_never_lost():
