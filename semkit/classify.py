@@ -6,12 +6,14 @@ intra-granular; else trans-granular. The fractions are reported per crack.
 
 Post-test (:func:`classify_post`), from morphology. Per skeleton pixel, over a window of
 radius :data:`WINDOW_PX`: local aperture (2 x distance to the wall), its variation, dark-pixel
-density, skeleton density (parallel or en-echelon traces) and endpoint density (steps, debris),
-and the excess dark area not explained by the local trace (debris in the band). A logistic
-model turns these into P(tensile) per skeleton pixel; a crack (a cluster of objects closer than
-:data:`LINK_PX`: en-echelon pieces and debris belong to their trace) is tensile when at least
-``hi`` of its skeleton is tensile, shear when at most ``lo`` is, mixed otherwise. The model is
-a small JSON-able dict; :func:`train_post` fits it from labelled cracks (``semkit classify
+density, skeleton density (parallel or en-echelon traces), endpoint density (steps, debris),
+the excess dark area not explained by the local trace (debris in the band), the scatter of the
+skeleton about its local line, and the dark fill (partial-volume dark width over the mask
+aperture: ~1 for a clean opening, low where the mask bridges thin layered traces). A logistic
+model turns these into P(tensile) per skeleton pixel; each crack pixel takes the smoothed
+decision of its nearest skeleton pixel (debris within :data:`LINK_PX` of a crack belongs to
+it), and a trace (skeleton branches continuing each other across junctions) holding long runs
+of both types is mixed. The model is a small JSON-able dict; :func:`train_post` fits it from labelled cracks (``semkit classify
 --train``).
 """
 from __future__ import annotations
@@ -41,6 +43,13 @@ WINDOW_PX = 10
 LINK_PX = 8
 #: objects with fewer pixels than this are "small" (debris, fragments).
 SMALL_OBJECT_PX = 40
+#: a trace is mixed when its long tensile runs and its long shear runs each make up at least
+#: this share of its skeleton (runs of the smoothed per-pixel decision, >= MIN_RUN_PX long).
+MIXED_SHARE = 0.2
+#: running-mean window (px) along a branch before runs are measured.
+RUN_SMOOTH_PX = 15
+#: shortest run (px) of one type that counts as a segment of a mixed crack.
+MIN_RUN_PX = 25
 #: skeleton branches shorter than this (px) are spurs/steps: typed by their neighbours.
 SHORT_BRANCH_PX = 12
 #: branches meeting at a junction within this angle of a straight continuation are one trace.
@@ -52,19 +61,18 @@ JUNCTION_PX = 4.0
 GAP_PX = 8.0
 #: feature names, in model order.
 FEATURE_NAMES = ("log_aperture", "aperture_cv", "dark_density", "skeleton_density",
-                 "endpoint_density", "excess_dark")
+                 "endpoint_density", "excess_dark", "skeleton_scatter", "dark_fill")
 #: default post-test model, fitted with :func:`train_post` on 12 synthetic post-test images
 #: (``semkit.synth.make_sem_image((384, 512), stage="post", n_cracks=12, seed=100..111)``,
-#: objects from the ``auto`` threshold's detection mask, labels = majority true type per
-#: object); see docs/semkit_science.md for how it scores on other seeds.
+#: objects and smoothed grey image from ``semkit.pipeline.analyse_image``, labels = majority
+#: true type per object); docs/semkit_science.md says how it scores on other seeds.
 DEFAULT_POST_MODEL = {
     "features": list(FEATURE_NAMES),
-    "mean": [1.3351, 0.2493, 0.2662, 1.3916, 0.0473, -0.0076],
-    "scale": [0.4524, 0.1436, 0.1382, 0.5367, 0.0577, 0.0457],
-    "coef": [0.7761, -0.1671, 0.2432, -0.7208, -0.5575, 0.0518],
-    "intercept": 0.0635,
-    "lo": 0.4,
-    "hi": 0.65,
+    "mean": [1.5507, 0.2042, 0.2914, 1.2048, 0.0315, 0.003, 1.3537, 0.7189],
+    "scale": [0.4394, 0.1414, 0.1291, 0.4184, 0.0402, 0.0424, 1.2248, 0.2011],
+    "coef": [-0.1815, -0.7929, 0.5274, -0.0418, -0.5316, -0.5838, 0.0796, 1.6036],
+    "intercept": 0.6546,
+    "mixed_share": 0.05,
     "window_px": WINDOW_PX,
     "link_px": float(LINK_PX),
 }
@@ -219,7 +227,7 @@ def crack_clusters(crack_labels, *, link_px=LINK_PX, small_px=SMALL_OBJECT_PX):
     return cluster_of
 
 
-def post_features(crack_labels, *, skeleton=None, window_px=WINDOW_PX):
+def post_features(crack_labels, *, image=None, skeleton=None, window_px=WINDOW_PX):
     """Morphological features at each skeleton pixel of the cracks.
 
     Parameters
@@ -234,11 +242,13 @@ def post_features(crack_labels, *, skeleton=None, window_px=WINDOW_PX):
     -------
     rows, cols : (K,) ndarray of int
         Skeleton pixel positions.
-    X : (K, 6) ndarray of float64
+    X : (K, 8) ndarray of float64
         Features in :data:`FEATURE_NAMES` order: log local aperture (px), aperture coefficient
         of variation, dark-pixel density, skeleton density (px of skeleton per px of window
-        side: ~1 for one trace, ~2 for layered traces), endpoint density (per window side) and
-        excess dark density (dark area not explained by the skeleton x aperture: debris).
+        side: ~1 for one trace, ~2 for layered traces), endpoint density (per window side),
+        excess dark density (dark area not explained by the skeleton x aperture: debris),
+        skeleton scatter (px, RMS distance of the window's skeleton from its best line) and
+        dark fill (partial-volume dark width / aperture; NaN without ``image``).
     """
     lab = np.asarray(crack_labels)
     mask = lab > 0
@@ -266,12 +276,34 @@ def post_features(crack_labels, *, skeleton=None, window_px=WINDOW_PX):
     end_dens = ends[rr, cc] * size
     dk = dark[rr, cc]
     excess = dk - n_s[rr, cc] * np.maximum(wm, 1.0)
-    X = np.column_stack([np.log(np.maximum(wm, 0.5)), cv, dk, skel_dens, end_dens, excess])
+    # scatter of the skeleton about its local best line: smallest eigenvalue of the
+    # covariance of skeleton coordinates in the window (zigzag steps, layered traces)
+    yy, xx = np.mgrid[0:lab.shape[0], 0:lab.shape[1]].astype(np.float64)
+    yy -= yy.mean()
+    xx -= xx.mean()
+    mx, my = box(sk * xx)[rr, cc] / ns, box(sk * yy)[rr, cc] / ns
+    sxx = box(sk * xx * xx)[rr, cc] / ns - mx * mx
+    syy = box(sk * yy * yy)[rr, cc] / ns - my * my
+    sxy = box(sk * xx * yy)[rr, cc] / ns - mx * my
+    lam = 0.5 * (sxx + syy) - np.sqrt(np.maximum(0.25 * (sxx - syy) ** 2 + sxy ** 2, 0.0))
+    scatter = np.sqrt(np.maximum(lam, 0.0))
+    # dark (partial-volume) width per skeleton px over the mask aperture: ~1 for an open
+    # crack, well below 1 where the mask bridges or fills between thin dark traces
+    if image is not None:
+        from .damage import darkness_fraction
+        f, _ = darkness_fraction(image, lab)
+        pv_w = box(f)[rr, cc] / ns
+        fill = pv_w / np.maximum(wm, 1.0)
+    else:
+        fill = np.full(rr.shape, np.nan)
+    X = np.column_stack([np.log(np.maximum(wm, 0.5)), cv, dk, skel_dens, end_dens, excess,
+                         scatter, fill])
     return rr, cc, X
 
 
 def _p_tensile(X, model):
     z = (X - np.asarray(model["mean"])) / np.asarray(model["scale"])
+    z = np.where(np.isfinite(z), z, 0.0)  # a feature not measured (no grey image): neutral
     s = z @ np.asarray(model["coef"]) + float(model["intercept"])
     return 1.0 / (1.0 + np.exp(-np.clip(s, -50, 50)))
 
@@ -344,10 +376,16 @@ def _assign_traces(lab, skel, rr, cc, p, *, link_px):
     n_tr = len(trace)
     tsum = np.zeros(n_tr)
     tcnt = np.zeros(n_tr)
+    run_t = np.zeros(n_tr)
+    run_s = np.zeros(n_tr)
     for i, c in enumerate(coords):
         if not short[i]:
-            tsum[trace[i]] += (p_img[c[:, 0], c[:, 1]] > 0.5).sum()
+            b = _smooth_runs(p_img[c[:, 0], c[:, 1]] > 0.5)
+            tsum[trace[i]] += b.sum()
             tcnt[trace[i]] += len(c)
+            lt, ls = _long_runs(b, MIN_RUN_PX)
+            run_t[trace[i]] += lt
+            run_s[trace[i]] += ls
     seed_img = np.full(lab.shape, -1, np.int64)
     for i, c in enumerate(coords):
         if not short[i]:
@@ -377,6 +415,10 @@ def _assign_traces(lab, skel, rr, cc, p, *, link_px):
                 tsum[new_tr[obj]] += (p_img[c[:, 0], c[:, 1]] > 0.5).sum()
                 tcnt[new_tr[obj]] += len(c)
     ft = np.where(tcnt > 0, tsum / np.maximum(tcnt, 1), np.nan)
+    n_all = len(ft)
+    run_t = np.r_[run_t, np.zeros(n_all - len(run_t))]
+    run_s = np.r_[run_s, np.zeros(n_all - len(run_s))]
+    mixed_share = np.minimum(run_t, run_s) / np.maximum(tcnt, 1)
     pix = np.full(lab.shape, -1, np.int64)
     cluster_of = crack_clusters(lab, link_px=link_px)
     clus = cluster_of[lab]
@@ -392,10 +434,54 @@ def _assign_traces(lab, skel, rr, cc, p, *, link_px):
         t = seed_img[win][ir, ic]
         pix[win][sel[win]] = t[sel[win]]
     ft = np.where(np.isfinite(ft), ft, 0.5)
-    return pix, ft
+    return pix, ft, mixed_share
 
 
-def classify_post(crack_labels, *, skeleton=None, model=None):
+def _nearest_in_cluster(lab, seed, *, link_px):
+    """Value of the nearest non-zero ``seed`` pixel of the same cluster, for every crack pixel."""
+    mask = lab > 0
+    out = np.zeros(lab.shape, seed.dtype)
+    clus = crack_clusters(lab, link_px=link_px)[lab]
+    for cid in np.unique(clus[mask]):
+        sel = clus == cid
+        rows = np.flatnonzero(sel.any(axis=1))
+        cols = np.flatnonzero(sel.any(axis=0))
+        win = (slice(rows[0], rows[-1] + 1), slice(cols[0], cols[-1] + 1))
+        seeds = sel[win] & (seed[win] > 0)
+        if not seeds.any():
+            continue
+        _, (ir, ic) = ndi.distance_transform_edt(~seeds, return_indices=True)
+        v = seed[win][ir, ic]
+        out[win][sel[win]] = v[sel[win]]
+    return out
+
+
+def _smooth_runs(b):
+    """Running mean of a boolean sequence over RUN_SMOOTH_PX, thresholded at 0.5."""
+    if len(b) < 3:
+        return b.astype(bool)
+    return ndi.uniform_filter1d(b.astype(float), RUN_SMOOTH_PX, mode="nearest") > 0.5
+
+
+def _long_runs(b, min_len):
+    """Total length of True runs and of False runs that are at least ``min_len`` long."""
+    if len(b) == 0:
+        return 0.0, 0.0
+    edges = np.flatnonzero(np.diff(b.astype(np.int8))) + 1
+    starts = np.r_[0, edges]
+    lens = np.diff(np.r_[starts, len(b)])
+    vals = b[starts]
+    keep = lens >= min_len
+    return float(lens[keep & vals].sum()), float(lens[keep & ~vals].sum())
+
+
+def _trace_codes(ft, mixed_share, model):
+    """1 tensile / 2 shear / 3 mixed per trace (the decision rule of classify_post)."""
+    return np.where(mixed_share >= float(model["mixed_share"]), 3,
+                    np.where(ft >= 0.5, 1, 2)).astype(np.int8)
+
+
+def classify_post(crack_labels, *, image=None, skeleton=None, model=None):
     """Classify post-test cracks as tensile, shear or mixed from their morphology.
 
     Parameters
@@ -414,7 +500,7 @@ def classify_post(crack_labels, *, skeleton=None, model=None):
         typed so: an object where a tensile and a shear crack cross is split, not averaged),
         ``tensile_fraction`` (share of tensile skeleton), the object means of the features
         ``aperture_mean_px, aperture_cv, dark_density, skeleton_density, endpoint_density,
-        excess_dark`` and ``tortuosity``.
+        excess_dark, skeleton_scatter, dark_fill`` and ``tortuosity``.
     type_image : (M, N) ndarray of int8
         Type per pixel: 0 none, 1 tensile, 2 shear, 3 mixed.
 
@@ -423,11 +509,12 @@ def classify_post(crack_labels, *, skeleton=None, model=None):
     p_T = 1 / (1 + exp(-(beta . z + beta_0))), z the standardised features of a skeleton
     pixel. The skeleton is split into branches at junctions; branches continuing each other
     within :data:`CONTINUE_DEG` across a junction form one trace (a crossing crack is a
-    different trace). With f_T the share of a trace's skeleton pixels with p_T > 0.5: tensile
-    if f_T >= hi, shear if f_T <= lo, else mixed. Every crack pixel takes the type of the
-    nearest trace; small objects (debris) within :data:`LINK_PX` of a crack take its type.
-    Confidence: mean |2 p_T - 1| over the object's skeleton for tensile/shear, for mixed
-    1 - |f_T - (lo + hi) / 2| / ((hi - lo) / 2).
+    different trace). Along each branch the decision p_T > 0.5 is smoothed over
+    :data:`RUN_SMOOTH_PX`; a trace whose runs of tensile and of shear (each >= MIN_RUN_PX)
+    both exceed ``mixed_share`` of its length is mixed. Otherwise each crack pixel takes the
+    smoothed decision of its nearest skeleton pixel (small objects within :data:`LINK_PX` of
+    a crack belong to it). The object's ``type_post`` is its area-majority type;
+    confidence = mean |2 p_T - 1| over its skeleton x the majority share.
     """
     model = DEFAULT_POST_MODEL if model is None else model
     lab = np.asarray(crack_labels)
@@ -436,20 +523,32 @@ def classify_post(crack_labels, *, skeleton=None, model=None):
     n = int(lab.max())
     cols = ["crack_id", "type_post", "confidence", "frac_tensile", "frac_shear", "frac_mixed",
             "tensile_fraction", "aperture_mean_px", "aperture_cv", "dark_density",
-            "skeleton_density", "endpoint_density", "excess_dark", "tortuosity"]
+            "skeleton_density", "endpoint_density", "excess_dark", "skeleton_scatter",
+            "dark_fill", "tortuosity"]
     type_img = np.zeros(lab.shape, np.int8)
     if n == 0:
         return pd.DataFrame(columns=cols), type_img
     mask = lab > 0
     skel = _skeleton(mask) if skeleton is None else (np.asarray(skeleton, bool) & mask)
-    rr, cc, X = post_features(lab, skeleton=skel,
+    rr, cc, X = post_features(lab, image=image, skeleton=skel,
                               window_px=int(model.get("window_px", WINDOW_PX)))
     p = _p_tensile(X, model)
-    lo, hi = float(model["lo"]), float(model["hi"])
-    pix_trace, ft_trace = _assign_traces(lab, skel, rr, cc, p,
-                                         link_px=float(model.get("link_px", LINK_PX)))
-    code_trace = np.where(ft_trace >= hi, 1, np.where(ft_trace <= lo, 2, 3)).astype(np.int8)
-    type_img[pix_trace >= 0] = code_trace[pix_trace[pix_trace >= 0]]
+    pix_trace, ft_trace, ms_trace = _assign_traces(lab, skel, rr, cc, p,
+                                                   link_px=float(model.get("link_px", LINK_PX)))
+    code_trace = _trace_codes(ft_trace, ms_trace, model)
+    # tensile/shear per pixel: the nearest skeleton pixel's decision, smoothed along the
+    # skeleton over RUN_SMOOTH_PX; mixed where the pixel's trace is mixed
+    sk = np.zeros(lab.shape)
+    sk[rr, cc] = 1.0
+    pv = np.zeros(lab.shape)
+    pv[rr, cc] = (p > 0.5)
+    num = ndi.uniform_filter(pv, RUN_SMOOTH_PX, mode="constant")
+    den = ndi.uniform_filter(sk, RUN_SMOOTH_PX, mode="constant")
+    seed = np.zeros(lab.shape, np.int64)
+    seed[rr, cc] = np.where(num[rr, cc] / np.maximum(den[rr, cc], 1e-12) > 0.5, 1, 2)
+    type_img[:] = _nearest_in_cluster(lab, seed, link_px=float(model.get("link_px", LINK_PX)))
+    is_mixed = (pix_trace >= 0) & (code_trace[np.maximum(pix_trace, 0)] == 3)
+    type_img[is_mixed] = 3
     # objects left untyped (isolated specks without a skeleton branch): their own f_T
     left = mask & (type_img == 0)
     if left.any():
@@ -457,7 +556,7 @@ def classify_post(crack_labels, *, skeleton=None, model=None):
         cnt_o = np.bincount(ids_sk, minlength=n + 1)
         ft_o = np.bincount(ids_sk, weights=(p > 0.5).astype(float), minlength=n + 1) / \
             np.maximum(cnt_o, 1)
-        code_o = np.where(ft_o >= hi, 1, np.where(ft_o <= lo, 2, 3)).astype(np.int8)
+        code_o = np.where(ft_o >= 0.5, 1, 2).astype(np.int8)
         type_img[left] = code_o[lab[left]]
     # per-object table
     area = np.bincount(lab.ravel(), minlength=n + 1).astype(float)
@@ -478,11 +577,8 @@ def classify_post(crack_labels, *, skeleton=None, model=None):
     for cid in np.unique(lab[mask]):
         f = np.array([fr[0][cid], fr[1][cid], fr[2][cid]])
         k = int(np.argmax(f)) + 1 if f.sum() > 0 else 0
-        if k in (1, 2):
+        if k in (1, 2, 3):
             conf = margin[cid] if cnt[cid] > 0 else 0.5
-        elif k == 3:
-            mid, half = 0.5 * (lo + hi), 0.5 * (hi - lo)
-            conf = 1.0 - abs(ft_obj[cid] - mid) / half
         else:
             conf = 0.0
         rows.append([int(cid), names[k], float(np.clip(conf, 0, 1)) * f.max() if k else 0.0,
@@ -527,10 +623,11 @@ def train_post(samples, *, window_px=WINDOW_PX, link_px=LINK_PX, seed=None):
 
     Parameters
     ----------
-    samples : iterable of (crack_labels, labels)
+    samples : iterable of (crack_labels, labels) or (crack_labels, labels, image)
         ``crack_labels`` an (M, N) int array of crack objects and ``labels`` a dict
         {crack_id: "tensile"|"shear"|"mixed"} (unlabelled objects are ignored), or an (M, N)
-        label image of type codes (0 none, 1 tensile, 2 shear, 3 mixed) per pixel.
+        label image of type codes (0 none, 1 tensile, 2 shear, 3 mixed) per pixel; ``image``
+        the (flattened, denoised) grey image, for the ``dark_fill`` feature.
     window_px, link_px : int, float
         Feature window and cluster link distance stored in the model.
     seed : int, optional
@@ -539,8 +636,8 @@ def train_post(samples, *, window_px=WINDOW_PX, link_px=LINK_PX, seed=None):
     Returns
     -------
     model : dict
-        :data:`DEFAULT_POST_MODEL` form; ``lo``/``hi`` chosen on the labelled clusters to
-        maximise the share of correctly typed crack area.
+        :data:`DEFAULT_POST_MODEL` form; ``mixed_share`` chosen (when mixed labels exist)
+        to maximise the correctly typed labelled crack area.
 
     Raises
     ------
@@ -549,7 +646,9 @@ def train_post(samples, *, window_px=WINDOW_PX, link_px=LINK_PX, seed=None):
     """
     codes = {"tensile": 1, "shear": 2, "mixed": 3}
     Xs, ys, per_sample = [], [], []
-    for crack_labels, labels in samples:
+    for sample in samples:
+        crack_labels, labels = sample[0], sample[1]
+        image = sample[2] if len(sample) > 2 else None
         lab = np.asarray(crack_labels)
         n = int(lab.max())
         if isinstance(labels, dict):
@@ -564,7 +663,7 @@ def train_post(samples, *, window_px=WINDOW_PX, link_px=LINK_PX, seed=None):
                 raise InputError(f"label image: expected shape {lab.shape}, "
                                  f"got {pix_code.shape}")
         skel = _skeleton(lab > 0)
-        rr, cc, X = post_features(lab, skeleton=skel, window_px=window_px)
+        rr, cc, X = post_features(lab, image=image, skeleton=skel, window_px=window_px)
         y = pix_code[rr, cc]
         sel = (y == 1) | (y == 2)
         Xs.append(X[sel])
@@ -578,31 +677,30 @@ def train_post(samples, *, window_px=WINDOW_PX, link_px=LINK_PX, seed=None):
     if len(y) > 200_000:
         keep = rng.choice(len(y), 200_000, replace=False)
         X, y = X[keep], y[keep]
-    mean = X.mean(axis=0)
-    scale = X.std(axis=0)
+    mean = np.nan_to_num(np.nanmean(X, axis=0))
+    scale = np.nan_to_num(np.nanstd(X, axis=0))
     scale[scale == 0] = 1.0
-    coef, intercept = _fit_logistic((X - mean) / scale, y)
+    coef, intercept = _fit_logistic(np.nan_to_num((X - mean) / scale), y)
     model = {"features": list(FEATURE_NAMES), "mean": mean.tolist(), "scale": scale.tolist(),
-             "coef": coef.tolist(), "intercept": intercept, "lo": 0.25, "hi": 0.75,
+             "coef": coef.tolist(), "intercept": intercept, "mixed_share": MIXED_SHARE,
              "window_px": int(window_px), "link_px": float(link_px)}
-    # band edges: maximise the correctly typed labelled crack area (same rule as classify_post)
-    stats = []  # per sample: f_T per trace, labelled area of each code per trace
+    # mixed share: maximise the correctly typed labelled crack area (rule of classify_post)
+    stats = []  # per sample: traces' f_T, mixed share, labelled area of each code per trace
     for lab, skel, rr, cc, Xi, pix_code in per_sample:
-        pix, ft = _assign_traces(lab, skel, rr, cc, _p_tensile(Xi, model), link_px=link_px)
+        pix, ft, ms = _assign_traces(lab, skel, rr, cc, _p_tensile(Xi, model),
+                                     link_px=link_px)
         sel = (pix >= 0) & (pix_code > 0)
         area = np.zeros((len(ft), 4))
         np.add.at(area, (pix[sel], pix_code[sel]), 1.0)
-        stats.append((ft, area))
-    best = (-1.0, 0.25, 0.75)
-    for lo in np.arange(0.05, 0.5, 0.05):
-        for hi in np.arange(0.55, 0.96, 0.05):
-            good = 0.0
-            for ft, area in stats:
-                pred = np.where(ft >= hi, 1, np.where(ft <= lo, 2, 3))
-                good += area[np.arange(len(ft)), pred].sum()
+        stats.append((ft, ms, area))
+    if any(a[:, 3].sum() > 0 for _, _, a in stats):  # only with mixed labels
+        best = (-1.0, MIXED_SHARE)
+        for share in np.arange(0.05, 0.51, 0.05):
+            m = dict(model, mixed_share=float(share))
+            good = sum(a[np.arange(len(f)), _trace_codes(f, s, m)].sum() for f, s, a in stats)
             if good > best[0] + 1e-9:
-                best = (good, float(lo), float(hi))
-    model["lo"], model["hi"] = round(best[1], 2), round(best[2], 2)
+                best = (good, round(float(share), 2))
+        model["mixed_share"] = best[1]
     return model
 
 
@@ -622,7 +720,7 @@ def load_model(path):
             model = json.load(fh)
     except (OSError, ValueError) as exc:
         raise InputError(f"{path}: cannot read crack model ({exc})") from None
-    need = ("mean", "scale", "coef", "intercept", "lo", "hi")
+    need = ("mean", "scale", "coef", "intercept", "mixed_share")
     miss = [k for k in need if k not in model]
     if miss:
         raise InputError(f"{path}: crack model lacks field(s) {miss}")
@@ -690,7 +788,7 @@ def apply_labels(cracks, labels):
 # ----------------------------------------------------------------------------- pipeline stage
 _POST_COLUMNS = ("frac_tensile", "frac_shear", "frac_mixed", "tensile_fraction",
                  "aperture_mean_px", "aperture_cv", "dark_density", "skeleton_density",
-                 "endpoint_density", "excess_dark")
+                 "endpoint_density", "excess_dark", "skeleton_scatter", "dark_fill")
 
 
 def classify_stage(cracks, crack_labels, *, grey=None, pixel_size_um=1.0, model=None,
@@ -734,7 +832,7 @@ def classify_stage(cracks, crack_labels, *, grey=None, pixel_size_um=1.0, model=
         out["confidence_pre"] = t["confidence"].to_numpy()
         out["confidence"] = out["confidence_pre"]
     if post and len(out):
-        t, _ = classify_post(lab, model=model)
+        t, _ = classify_post(lab, image=grey, model=model)
         t = t.set_index("crack_id").reindex(ids)
         out["type_post"] = t["type_post"].fillna("unknown").to_numpy()
         out["confidence"] = t["confidence"].to_numpy()
@@ -784,5 +882,6 @@ def train_from_folder(folder, labels, *, pixel_size_um=None, seed=None, **option
             raise InputError(f"labels: image {name!r} not found in {folder}")
         li = load_image(path, manifest_row=mrows.get(str(name)), pixel_size_um=pixel_size_um)
         a = CrackAnalysis(li.image, pixel_size_um=li.pixel_size_um, name=str(name), options=opts)
-        samples.append((a.crack_labels, dict(zip(g["crack_id"].astype(int), g["type"]))))
+        samples.append((a.crack_labels, dict(zip(g["crack_id"].astype(int), g["type"])),
+                        a.smooth))
     return train_post(samples, seed=seed)

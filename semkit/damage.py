@@ -20,7 +20,7 @@ import pandas as pd
 from .errors import InputError
 from .indices import damage_ratio
 
-__all__ = ["p_status", "image_damage", "typed_areas", "flag_outliers", "damage_table", "plot_p_by_stage",
+__all__ = ["p_status", "image_damage", "typed_areas", "darkness_fraction", "flag_outliers", "damage_table", "plot_p_by_stage",
            "STAGE_ORDER", "OUTLIER_Z", "OUTLIER_MIN_N"]
 
 #: Order of the loading stages on the P-by-stage plot and in ``damage.csv``.
@@ -135,6 +135,43 @@ def image_damage(cracks, *, mixed="exclude", area_column=None):
     return out
 
 
+def darkness_fraction(image, crack_labels, *, core=None, band_px=PV_BAND_PX,
+                      background_sigma_px=PV_BACKGROUND_SIGMA_PX):
+    """Partial-volume darkness of each pixel near the cracks (0 background .. 1 crack core).
+
+    Parameters
+    ----------
+    image : (M, N) ndarray
+    crack_labels : (M, N) ndarray of int
+    core : float, optional
+        Grey level of a fully dark crack pixel; default the 2nd percentile inside the objects.
+    band_px, background_sigma_px : float
+        See :func:`typed_areas`.
+
+    Returns
+    -------
+    f : (M, N) ndarray of float64
+        clip((B - I) / (B - I_core), 0, 1) within ``band_px`` of an object, else 0.
+    nearest : tuple of two (M, N) ndarrays of int
+        Row and column of the nearest object pixel (for ownership).
+    """
+    from scipy import ndimage as ndi
+    img = np.asarray(image, dtype=np.float64)
+    obj = np.asarray(crack_labels) > 0
+    dist, (ir, ic) = ndi.distance_transform_edt(~obj, return_indices=True)
+    region = dist <= band_px
+    bg_mask = dist > band_px + 1
+    num = ndi.gaussian_filter(np.where(bg_mask, img, 0.0), background_sigma_px)
+    den = ndi.gaussian_filter(bg_mask.astype(np.float64), background_sigma_px)
+    fill = np.median(img[bg_mask]) if bg_mask.any() else img.max()
+    bg = np.where(den > 1e-3, num / np.maximum(den, 1e-3), fill)
+    if core is None:
+        core = float(np.percentile(img[obj], 2)) if obj.any() else float(img.min())
+    f = np.clip((bg - img) / np.maximum(bg - float(core), 1e-6), 0.0, 1.0)
+    f[~region] = 0.0
+    return f, (ir, ic)
+
+
 def typed_areas(image, crack_labels, type_image=None, *, core=None, band_px=PV_BAND_PX,
                 background_sigma_px=PV_BACKGROUND_SIGMA_PX):
     """Partial-volume crack areas per object, split by post-test type.
@@ -178,16 +215,8 @@ def typed_areas(image, crack_labels, type_image=None, *, core=None, band_px=PV_B
     if n == 0:
         return pd.DataFrame(columns=cols)
     obj = lab > 0
-    dist, (ir, ic) = ndi.distance_transform_edt(~obj, return_indices=True)
-    region = dist <= band_px
-    bg_mask = dist > band_px + 1
-    num = ndi.gaussian_filter(np.where(bg_mask, img, 0.0), background_sigma_px)
-    den = ndi.gaussian_filter(bg_mask.astype(np.float64), background_sigma_px)
-    bg = np.where(den > 1e-3, num / np.maximum(den, 1e-3), np.median(img[bg_mask])
-                  if bg_mask.any() else img.max())
-    core = float(np.percentile(img[obj], 2)) if core is None else float(core)
-    f = np.clip((bg - img) / np.maximum(bg - core, 1e-6), 0.0, 1.0)
-    f[~region] = 0.0
+    f, (ir, ic) = darkness_fraction(img, lab, core=core, band_px=band_px,
+                                    background_sigma_px=background_sigma_px)
     owner = lab[ir, ic]
     types = np.zeros(lab.shape, np.int64) if type_image is None else \
         np.asarray(type_image).astype(np.int64)[ir, ic]

@@ -21,9 +21,12 @@ from semkit.errors import InputError
 
 PRE = {"inter": 1, "intra": 2, "trans": 3}
 POST = {"tensile": 1, "shear": 2, "mixed": 3}
-# measured on synthetic images (docs/semkit_science.md); the issue's targets are 0.90
+# issue #3 targets: 0.90 for both accuracies, P within 15 % (median). Measured on seeds
+# 200-211 (docs/semkit_science.md): post accuracy 0.84, median |P error| 0.20 -> the post
+# targets are NOT met; asserted here at what is reached on seeds 200-205, minus a margin.
 PRE_AREA_ACCURACY_MIN = 0.90
-POST_AREA_ACCURACY_MIN = 0.75
+POST_AREA_ACCURACY_MIN = 0.80
+P_MEDIAN_ERROR_MAX = 0.30
 
 
 def _grain_map():
@@ -102,8 +105,9 @@ def test_classify_post_hand_drawn_tensile_and_shear():
         img[r, c0:c0 + 24] = 30
     for c in range(25, 180, 12):
         img[94 + rng.integers(0, 2), c:c + 2] = 30
+    img = ndi.gaussian_filter(img, 0.6) + rng.normal(0, 3, img.shape)
     lab, _ = ndi.label(img < 90, structure=np.ones((3, 3)))
-    t, types = classify_post(lab)
+    t, types = classify_post(lab, image=img)
     a_t = ((types == 1) & (lab > 0))[20:40].sum() / (lab[20:40] > 0).sum()
     a_s = ((types == 2) & (lab > 0))[80:100].sum() / (lab[80:100] > 0).sum()
     assert a_t > 0.9 and a_s > 0.9, (a_t, a_s)
@@ -122,34 +126,36 @@ def test_crack_clusters_attach_debris_to_nearest_large_crack():
 
 
 def _post_sample(seed):
+    """A post-test synthetic image analysed by the crack pipeline: (synth, analysis, truth)."""
     synth = pytest.importorskip("semkit.synth")
+    from semkit.pipeline import analyse_image
     s = synth.make_sem_image((384, 512), stage="post", n_cracks=12, seed=seed)
-    lab = _detect(s.image)
+    a = analyse_image(s.image, pixel_size_um=s.pixel_size_um)
     code = np.zeros(len(s.cracks) + 1, int)
     code[s.cracks.crack_id] = [POST[x] for x in s.cracks.type_post]
-    return s, lab, code[s.crack_labels]
+    return s, a, code[s.crack_labels]
 
 
 def test_classify_post_synthetic_accuracy_and_p():
     good = tot = 0
     p_err = []
     for seed in (200, 201, 202, 203, 204, 205):
-        s, lab, truth = _post_sample(seed)
-        table, types = classify_post(lab)
+        s, a, truth = _post_sample(seed)
+        lab = a.crack_labels
+        table, types = classify_post(lab, image=a.smooth)
         sel = (truth > 0) & (lab > 0)
         good += (types[sel] == truth[sel]).sum()
         tot += sel.sum()
-        areas = typed_areas(ndi.gaussian_filter(s.image.astype(float), 0.7), lab, types)
+        areas = typed_areas(a.smooth, lab, types)
         p = damage_ratio(areas.area_T_px.sum(), areas.area_S_px.sum())
         p_true = (truth == 1).sum() / (truth == 2).sum()
         p_err.append(abs(p / p_true - 1))
         assert set(table.type_post) <= {"tensile", "shear", "mixed"}
         assert ((table.confidence >= 0) & (table.confidence <= 1)).all()
-        np.testing.assert_allclose(table[["frac_tensile", "frac_shear", "frac_mixed"]].sum(axis=1),
-                                   1.0, atol=1e-9)
+        np.testing.assert_allclose(table[["frac_tensile", "frac_shear", "frac_mixed"]].sum(
+            axis=1), 1.0, atol=1e-9)
     assert good / tot >= POST_AREA_ACCURACY_MIN, good / tot
-    # measured median |P error| 0.14 over seeds 200-209 (docs); asserted loosely here
-    assert np.median(p_err) <= 0.30, np.round(p_err, 3)
+    assert np.median(p_err) <= P_MEDIAN_ERROR_MAX, np.round(p_err, 3)
 
 
 def test_typed_areas_partial_volume_unbiased_for_thin_lines():
@@ -175,10 +181,11 @@ def test_typed_areas_partial_volume_unbiased_for_thin_lines():
 def test_train_save_load_and_user_labels(tmp_path):
     samples = []
     for seed in (100, 101, 102):
-        s, lab, truth = _post_sample(seed)
-        samples.append((lab, np.where(lab > 0, truth, 0)))
+        s, a, truth = _post_sample(seed)
+        lab = a.crack_labels
+        samples.append((lab, np.where(lab > 0, truth, 0), a.smooth))
     model = train_post(samples, seed=0)
-    assert 0 < model["lo"] < model["hi"] < 1 and len(model["coef"]) == 6
+    assert 0 < model["mixed_share"] < 1 and len(model["coef"]) == 8
     save_model(model, tmp_path / "m.json")
     back = load_model(tmp_path / "m.json")
     lab = samples[0][0]
@@ -203,4 +210,4 @@ def test_train_save_load_and_user_labels(tmp_path):
     pd.DataFrame(dict(image=["a"], crack_id=[1], type=["bogus"])).to_csv(tmp_path / "x.csv")
     with pytest.raises(InputError, match="bogus"):
         read_labels(tmp_path / "x.csv")
-    assert DEFAULT_POST_MODEL["lo"] < DEFAULT_POST_MODEL["hi"]
+    assert len(DEFAULT_POST_MODEL["coef"]) == len(DEFAULT_POST_MODEL["mean"]) == 8
