@@ -21,7 +21,7 @@ from .fidelity import fidelity_report
 from .packing import pack_particles, pack_seeds
 from .params import Params, load_params
 from .table import GrainSizeTable
-from .tessellate import Grains, fit_power_weights, polygon_areas, tessellate
+from .tessellate import Grains, fit_power_weights, polygon_areas, polygon_centroids, tessellate
 
 __all__ = ["build_grains", "build_specimen", "BuildResult", "TESSELLATIONS"]
 
@@ -91,7 +91,8 @@ def build_grains(table: GrainSizeTable | None = None, *, width_mm, height_mm, sc
         Laguerre: power diagram of the seed disks; Voronoi: of their centres (PFC).
     fit_areas : bool
         Laguerre only: start from weights r^2 and adjust them (damped Newton) so that every
-        cell has the area of its seed's target grain size (default). False keeps w = r^2.
+        cell has the area of its seed's target grain size, then move the seeds to their cell
+        centroids and fit again (``CENTROID_STEPS``) (default). False keeps w = r^2.
     shape : {"hexagon", "rectangle", "shield"}, optional
         Controlled tessellation instead of seeds (thesis Ch. 5).
     slenderness : float
@@ -138,10 +139,20 @@ def build_grains(table: GrainSizeTable | None = None, *, width_mm, height_mm, sc
     fit = {}
     if tessellation == "laguerre":
         w = seeds.r ** 2
+        sx, sy = seeds.x, seeds.y
         if fit_areas:
-            w, fit = fit_power_weights(seeds.x, seeds.y, box, np.pi * seeds.d ** 2 / 4.0,
-                                       weights=w)
-        xy, off, sidx = tessellate(seeds.x, seeds.y, box, weights=w)
+            target = np.pi * seeds.d ** 2 / 4.0
+            w, fit = fit_power_weights(sx, sy, box, target, weights=w)
+            for _ in range(config.CENTROID_STEPS):
+                xy, off, sidx = tessellate(sx, sy, box, weights=w)
+                c = polygon_centroids(xy, off)
+                sx, sy = sx.copy(), sy.copy()
+                sx[sidx], sy[sidx] = c[:, 0], c[:, 1]
+                w, fit = fit_power_weights(sx, sy, box, target, weights=w)
+        xy, off, sidx = tessellate(sx, sy, box, weights=w)
+        own = particles_to_grains(sx[sidx], sy[sidx], xy, off, box)
+        fit = dict(fit, centroid_steps=config.CENTROID_STEPS if fit_areas else 0,
+                   seeds_in_own_cell=float(np.mean(own == np.arange(sidx.size))))
     else:
         xy, off, sidx = tessellate(seeds.x, seeds.y, box)
     grains = Grains(xy=xy, offsets=off, mineral=seeds.mineral[sidx], klass=seeds.klass[sidx],

@@ -34,6 +34,11 @@ SEED_PACKING_FRACTION = 0.80
 SEED_OVERLAP_TOL = 0.05
 SEED_MAX_ITER = 4000
 
+#: Fitted Laguerre: after the weight fit, move each seed to its cell's centroid and fit again,
+#: this many times (one step puts ~98 % of the seeds inside their own cells, against ~31 %
+#: straight after the fit, whose weights may shift cells away from their seeds).
+CENTROID_STEPS = 1
+
 # ---------------------------------------------------------------- particles
 #: ``--particle-radius-mm`` is the mean radius; radii are uniform in [rmin, ratio*rmin].
 PARTICLE_RADIUS_MM = 0.1

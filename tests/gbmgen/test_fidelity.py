@@ -77,3 +77,10 @@ def test_report_carries_voronoi_on_the_same_seeds():
     vor = info["voronoi_same_seeds"]
     assert min(vor["ks"].values()) >= 0.15
     assert vor["area_fraction_error_max"] > config.AREA_FRACTION_TOL
+
+
+def test_fitted_cells_hold_their_seeds():
+    fit = full_grains(1).info["weight_fit"]
+    assert fit["max_rel_error"] <= 0.01 and fit["centroid_steps"] >= 1
+    assert fit["seeds_in_own_cell"] >= 0.95
+    assert full_grains(1, 1.0, "laguerre", False).info["weight_fit"]["seeds_in_own_cell"] == 1.0
