@@ -8,14 +8,15 @@ from .errors import InstabilityError
 
 
 def instability_error(cause_code, index, step, dt, factor, pairs=None, wall_pairs=None,
-                      kratio_spread=None):
+                      kratio_spread=None, bond_pairs=None):
     """Build the :class:`InstabilityError` for a kernel stop.
 
     Parameters
     ----------
     cause_code : int
         1 NaN/inf, 2 energy blow-up (a particle moved > MAX_STEP_DISPLACEMENT·R in one step),
-        3 ball–ball overlap, 4 wall overlap (> MAX_OVERLAP × smaller radius).
+        3 ball–ball overlap, 4 wall overlap, 5 overlap of a bonded pair (> MAX_OVERLAP ×
+        smaller radius).
     index : int
         Worst particle (codes 1, 2), contact (3) or wall contact (4).
     step : int
@@ -27,7 +28,7 @@ def instability_error(cause_code, index, step, dt, factor, pairs=None, wall_pair
     kratio_spread : float, optional
         Largest / smallest per-particle k/m, quoted in the hint.
     """
-    cause = {1: "nan", 2: "energy", 3: "overlap", 4: "overlap"}[int(cause_code)]
+    cause = {1: "nan", 2: "energy", 3: "overlap", 4: "overlap", 5: "overlap"}[int(cause_code)]
     if cause_code in (1, 2):
         what = f"particle {index}"
         detail = ("velocity or position became NaN/inf" if cause_code == 1 else
@@ -36,6 +37,11 @@ def instability_error(cause_code, index, step, dt, factor, pairs=None, wall_pair
     elif cause_code == 3:
         i, j = (int(pairs[0][index]), int(pairs[1][index])) if pairs is not None else (-1, -1)
         what = f"contact {index} (particles {i}, {j})"
+        detail = f"overlap exceeded {config.MAX_OVERLAP} x the smaller radius"
+    elif cause_code == 5:
+        i, j = ((int(bond_pairs[0][index]), int(bond_pairs[1][index])) if bond_pairs is not None
+                else (-1, -1))
+        what = f"bonded pair {index} (particles {i}, {j})"
         detail = f"overlap exceeded {config.MAX_OVERLAP} x the smaller radius"
     else:
         p, w = (int(wall_pairs[0][index]), int(wall_pairs[1][index])) \

@@ -20,20 +20,33 @@ sign the analytic cases require; shear, moment and stress formulas are as printe
 from math import sqrt
 
 from ._jit import njit
-from .contacts.linear import linear_force
+from .contacts.linear import linear_force, linear_force_masked
 from .contacts.parallel_bond import pb_update
 from .contacts.smooth_joint import sj_update
 
 
 @njit
-def pb_range(lo, hi, step, dt, kin, bi, bj, bstate, fn_, fs_, mb_, kna_, ksa_,
-             kni_, ari_, tena_, coha_, tanfa_, acc, brk_x, brk_y, brk_nx, brk_ny,
-             brk_step):
-    """Parallel bonds ``lo:hi``; returns the number of bonds that broke in this step."""
+def pb_range(lo, hi, step, dt, kin, bi, bj, bstate, fn_, fs_, mb_, kna_, ksa_, kni_, ari_, tena_,
+             coha_, tanfa_, lfs_, lfn_, lkn_, lks_, lmu_, lcn_, lcs_, acc, brk_x, brk_y, brk_nx,
+             brk_ny, brk_step):
+    """Parallel-bonded pairs ``lo:hi``: the bond (while intact) plus the linear contact part of
+    the pair (whenever the balls overlap, bonded or not, with its own shear history and
+    dashpots ``lcn, lcs``, zero when the scene has none). These pairs are kept out of the
+    Verlet contact list, so each is computed once per step.
+
+    Returns
+    -------
+    nbreak : int
+        Bonds that broke in this step.
+    worst : float
+        Largest overlap / min radius among these pairs.
+    bworst : int
+        Its bond index (-1 if none overlaps).
+    """
     nbreak = 0
+    worst = 0.0
+    bworst = -1
     for b in range(lo, hi):
-        if bstate[b] != 0:
-            continue
         i = bi[b]
         j = bj[b]
         oi = 8 * i
@@ -56,19 +69,44 @@ def pb_range(lo, hi, step, dt, kin, bi, bj, bstate, fn_, fs_, mb_, kna_, ksa_,
         inv = 1.0 / d
         nx = dx * inv
         ny = dy * inv
-        hg = 0.5 * (d - ri - rj)
-        ai = ri + hg
-        aj = rj + hg
+        ov = ri + rj - d
+        ai = ri - 0.5 * ov
+        aj = rj - 0.5 * ov
         dvx = vxj - vxi
         dvy = vyj - vyi
         vn = dvx * nx + dvy * ny
         vt = -dvx * ny + dvy * nx - wj * aj - wi * ai
-        fn, fs, mb, mode = pb_update(fn_[b], fs_[b], mb_[b], vn * dt, vt * dt,
-                                     (wj - wi) * dt, kna_[b], ksa_[b], kni_[b], ari_[b],
-                                     tena_[b], coha_[b], tanfa_[b])
-        fn_[b] = fn
-        fs_[b] = fs
-        mb_[b] = mb
+        fn = 0.0
+        fs = 0.0
+        mb = 0.0
+        if bstate[b] == 0:
+            fn, fs, mb, mode = pb_update(fn_[b], fs_[b], mb_[b], vn * dt, vt * dt,
+                                         (wj - wi) * dt, kna_[b], ksa_[b], kni_[b], ari_[b],
+                                         tena_[b], coha_[b], tanfa_[b])
+            fn_[b] = fn
+            fs_[b] = fs
+            mb_[b] = mb
+            if mode != 0:
+                bstate[b] = mode
+                brk_x[b] = xi + ai * nx
+                brk_y[b] = yi + ai * ny
+                brk_nx[b] = nx
+                brk_ny[b] = ny
+                brk_step[b] = step
+                nbreak += 1
+        # linear part of the pair (branch-free: about half the bonded pairs touch)
+        fnl, fsl, on = linear_force_masked(ov, vt * dt, lkn_[b], lks_[b], lmu_[b], lfs_[b])
+        ovp = ov * on
+        lfs_[b] = fsl
+        fnl -= lcn_[b] * vn * on
+        fsl -= lcs_[b] * vt * on
+        lfn_[b] = fnl
+        fn += fnl
+        fs += fsl
+        rmin = min(ri, rj)
+        if ovp > worst * rmin:
+            worst = ovp / rmin
+            bworst = b
         fx = fn * nx - fs * ny
         fy = fn * ny + fs * nx
         o = 4 * i
@@ -79,15 +117,7 @@ def pb_range(lo, hi, step, dt, kin, bi, bj, bstate, fn_, fs_, mb_, kna_, ksa_,
         acc[o] += fx
         acc[o + 1] += fy
         acc[o + 2] += -aj * fs + mb
-        if mode != 0:
-            bstate[b] = mode
-            brk_x[b] = xi + ai * nx
-            brk_y[b] = yi + ai * ny
-            brk_nx[b] = nx
-            brk_ny[b] = ny
-            brk_step[b] = step
-            nbreak += 1
-    return nbreak
+    return nbreak, worst, bworst
 
 
 @njit

@@ -13,7 +13,7 @@ from . import config
 from ._jit import njit, prange
 from .damping import local_damping
 from .forces import contact_range, contact_range_dashpot, pb_range, sj_range
-from .state import (ARI, BRK_NX, BRK_NY, BRK_STEP, BRK_X, BRK_Y, C_CN, C_CS, C_FN,
+from .state import (ARI, LCN, LCS, LFN, LFS, LKN, LKS, LMU, BRK_NX, BRK_NY, BRK_STEP, BRK_X, BRK_Y, C_CN, C_CS, C_FN,
                     C_FS, C_KN, C_KS, C_MU, COHA, FM, FN, FRIC, FS, FVX, FVY, FW, FX,
                     FY, INVI, INVM, KNA, KNI, KSA, MB, NJX, NJY, Q_FN, Q_FS, Q_KN, Q_KS, Q_MU, R,
                     TANDIL, TANFA, TENA, UN, VX, VY, W, W_DISP, X, X0, Y, Y0)
@@ -135,18 +135,21 @@ def pairs_chunk(c, nchunks, step, dt, use_dash, kin, bi, bj, bstate, bf, npb, ns
     -------
     nbreak : int
     worst : float
-        Largest contact overlap / min radius.
+        Largest overlap / min radius among the chunk's pairs.
     kworst : int
-        Its contact index.
+        Its contact index, or −(bond index) − 2 for a parallel-bonded pair.
     """
     nbreak = 0
+    bworst = 0.0
+    kb = -1
     if npb > 0:
         lo = (npb * c) // nchunks
         hi = (npb * (c + 1)) // nchunks
-        nbreak += pb_range(lo, hi, step, dt, kin, bi, bj, bstate, bf[FN], bf[FS],
-                           bf[MB], bf[KNA], bf[KSA], bf[KNI], bf[ARI], bf[TENA], bf[COHA],
-                           bf[TANFA], acc, bf[BRK_X], bf[BRK_Y], bf[BRK_NX], bf[BRK_NY],
-                           bf[BRK_STEP])
+        nbreak, bworst, kb = pb_range(lo, hi, step, dt, kin, bi, bj, bstate, bf[FN], bf[FS],
+                                      bf[MB], bf[KNA], bf[KSA], bf[KNI], bf[ARI], bf[TENA],
+                                      bf[COHA], bf[TANFA], bf[LFS], bf[LFN], bf[LKN], bf[LKS],
+                                      bf[LMU], bf[LCN], bf[LCS], acc, bf[BRK_X], bf[BRK_Y],
+                                      bf[BRK_NX], bf[BRK_NY], bf[BRK_STEP])
     if nsj > 0:
         lo = npb + (nsj * c) // nchunks
         hi = npb + (nsj * (c + 1)) // nchunks
@@ -166,6 +169,10 @@ def pairs_chunk(c, nchunks, step, dt, use_dash, kin, bi, bj, bstate, bf, npb, ns
         else:
             worst, kworst = contact_range(lo, hi, dt, kin, ci, cj, cf[C_FS],
                                           cf[C_KN], cf[C_KS], cf[C_MU], cf[C_FN], acc)
+    if bworst > worst:
+        # overlap records of bonded pairs are encoded as -(bond index) - 2
+        worst = bworst
+        kworst = -kb - 2
     return nbreak, worst, kworst
 
 
@@ -297,8 +304,8 @@ def run_steps(nsteps, step0, dt, alpha, nchunks, skin, step_lim, overlap_lim, t,
                                          qf[Q_FS], qf[Q_KN], qf[Q_KS], qf[Q_MU], qf[Q_FN])
         info[4] = max(worst, wworst)
         if worst > overlap_lim:
-            info[1] = 3.0
-            info[2] = kworst
+            info[1] = 3.0 if kworst >= 0 else 5.0
+            info[2] = kworst if kworst >= 0 else -kworst - 2
             return s + 1, 2
         if wworst > overlap_lim:
             info[1] = 4.0
@@ -332,9 +339,10 @@ def run_steps(nsteps, step0, dt, alpha, nchunks, skin, step_lim, overlap_lim, t,
 def critical_timestep(state, t=config.THICKNESS):
     """Per-particle critical time step √(m/k_tran), √(I/k_rot) (REFERENCE.md §5), s.
 
-    Stiffness sums run over intact bonds, every pair in the Verlet list (touching or not: a
-    conservative bound for contacts that form before the next rebuild) and wall candidates; per
-    contact the larger of normal and shear stiffness is taken.
+    Stiffness sums run over intact bonds, the linear part of every parallel-bonded pair, every
+    pair in the Verlet list (touching or not: a conservative bound for contacts that form before
+    the next rebuild) and wall candidates; per contact the larger of normal and shear stiffness
+    is taken.
 
     Returns
     -------
@@ -349,6 +357,7 @@ def critical_timestep(state, t=config.THICKNESS):
     intact = state.bstate == 0
     sj = state.bkind == 1
     live = intact | sj  # an unbonded smooth joint still has frictional stiffness
+    pb = state.bkind == 0
     for ends in (state.bi, state.bj):
         e = ends[live]
         kna = state.bf[KNA][live]
@@ -356,6 +365,11 @@ def critical_timestep(state, t=config.THICKNESS):
         kni = state.bf[KNI][live] * intact[live]
         ktr += np.bincount(e, np.maximum(kna, ksa), minlength=n)
         krot += np.bincount(e, ksa * r[e] ** 2 + kni, minlength=n)
+        # linear contact part of parallel-bonded pairs (whether or not they touch now)
+        e = ends[pb]
+        lkn, lks = state.bf[LKN][pb], state.bf[LKS][pb]
+        ktr += np.bincount(e, np.maximum(lkn, lks), minlength=n)
+        krot += np.bincount(e, lks * r[e] ** 2, minlength=n)
     nc = state.nc
     if nc:
         kn = state.cf[C_KN, :nc]

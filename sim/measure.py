@@ -7,7 +7,7 @@ import math
 import numpy as np
 
 from .state import (C_FN, C_FS, C_KN, C_KS, FM, FN, FS, FX, FY, INERTIA, INVI, INVM, KNA,
-                    KNI, KSA, MASS, MB, NJX, NJY, Q_FN, Q_FS, Q_KN, Q_KS, UN, VX, VY, W, X, Y)
+                    KNI, KSA, LFN, LFS, LKN, LKS, MASS, MB, NJX, NJY, Q_FN, Q_FS, Q_KN, Q_KS, UN, VX, VY, W, X, Y)
 
 
 def energies(state, dt, alpha=0.0):
@@ -45,6 +45,8 @@ def energies(state, dt, alpha=0.0):
     cf = state.cf
     fn = cf[C_FN, :nc]
     e_c = np.sum(0.5 * fn ** 2 / cf[C_KN, :nc] + 0.5 * cf[C_FS, :nc] ** 2 / cf[C_KS, :nc])
+    lin = np.nonzero(state.bkind == 0)[0]
+    e_c += np.sum(0.5 * bf[LFN, lin] ** 2 / bf[LKN, lin] + 0.5 * bf[LFS, lin] ** 2 / bf[LKS, lin])
     nq = state.nq
     qf = state.qf
     e_w = np.sum(0.5 * qf[Q_FN, :nq] ** 2 / qf[Q_KN, :nq] + 0.5 * qf[Q_FS, :nq] ** 2 / qf[Q_KS, :nq])
@@ -58,23 +60,26 @@ def pair_forces(state):
     Returns
     -------
     list of (i, j, fx, fy)
-        Intact parallel bonds (F̄n n̂ + F̄s t̂), smooth joints (Fn n̂j + Fs t̂j) and touching
-        contacts (normal force incl. the normal dashpot, plus the shear spring force), N.
+        Parallel-bonded pairs (bond F̄n n̂ + F̄s t̂ plus their linear contact part), smooth
+        joints (Fn n̂j + Fs t̂j) and touching contacts (normal force incl. the normal dashpot,
+        plus the shear spring force), N.
     """
     pf = state.pf
     x, y = pf[X], pf[Y]
     out = []
     bf = state.bf
-    for sel, jframe in ((np.nonzero((state.bkind == 0) & (state.bstate == 0))[0], False),
-                        (np.nonzero(state.bkind == 1)[0], True)):
+    pb = state.bkind == 0
+    for sel, jframe in ((np.nonzero(pb & ((bf[FN] != 0) | (bf[FS] != 0) | (bf[LFN] != 0)))[0],
+                         False), (np.nonzero(state.bkind == 1)[0], True)):
         i, j = state.bi[sel], state.bj[sel]
         if jframe:
             nx, ny = bf[NJX, sel], bf[NJY, sel]
+            fn, fs = bf[FN, sel], bf[FS, sel]
         else:
             dx, dy = x[j] - x[i], y[j] - y[i]
             d = np.hypot(dx, dy)
             nx, ny = dx / d, dy / d
-        fn, fs = bf[FN, sel], bf[FS, sel]
+            fn, fs = bf[FN, sel] + bf[LFN, sel], bf[FS, sel] + bf[LFS, sel]
         out.append((i, j, fn * nx - fs * ny, fn * ny + fs * nx))
     nc = state.nc
     sel = np.nonzero(state.cf[C_FN, :nc] != 0)[0]

@@ -23,7 +23,7 @@ from .measure import energies, unbalanced_ratio, virial_stress
 from .neighbors import build_contacts, partner_csr
 from .specimen import Specimen
 from .state import (ARI, BRK_NX, BRK_NY, BRK_STEP, BRK_X, BRK_Y, C_CN, C_CS, C_FS, C_KN, C_KS,
-                    C_MU, COHA, FIX_ROTATION, FIX_X, FIX_Y, FM, FRIC, FVX, FVY, FW, FX, FY,
+                    C_MU, COHA, LCN, LCS, LKN, LKS, LMU, FIX_ROTATION, FIX_X, FIX_Y, FM, FRIC, FVX, FVY, FW, FX, FY,
                     INERTIA, INVI, INVM, KNA, KNI, KSA, MASS, NBF, NCF, NJX, NJY, NPF, NQF, NWF,
                     Q_FS, Q_KN, Q_KS, Q_MU, R, SIZE, TANDIL, TANFA, TENA, VX, VY, W, W_DISP,
                     W_EMOD, W_FRIC, W_FX, W_FY, W_GAIN, W_LENGTH, W_NX, W_NY, W_PX, W_PY,
@@ -167,12 +167,18 @@ class Simulation:
         bf[NJX, sj] = jx * flip
         bf[NJY, sj] = jy * flip
         bf[BRK_STEP] = -1
-        sj_ptr, sj_adj = partner_csr(n, bi[sj], bj[sj])
+        # linear contact part of parallel-bonded pairs (computed with the bond)
+        mi, mj = sp.mineral[bi[pb]], sp.mineral[bj[pb]]
+        bf[LKN, pb], bf[LKS, pb] = linear_stiffness(r1[pb], r2[pb], sp.emod[mi], sp.emod[mj],
+                                                    0.5 * (sp.kratio[mi] + sp.kratio[mj]), t)
+        bf[LMU, pb] = np.minimum(sp.fric[mi], sp.fric[mj])
+        # every bonded pair stays out of the Verlet contact list
+        excl_ptr, excl_adj = partner_csr(n, bi, bj)
         cap = 0
         return State(pf=pf, fix=np.zeros(n, np.int8), mineral=sp.mineral.copy(),
                      grain=sp.grain.copy(), bf=bf, bi=bi, bj=bj,
                      bkind=bkind, bstate=np.zeros(nb, np.int8), bid=order.astype(np.int64),
-                     sj_ptr=sj_ptr, sj_adj=sj_adj,
+                     excl_ptr=excl_ptr, excl_adj=excl_adj,
                      cf=np.zeros((NCF, cap)), ci=np.zeros(cap, np.int32),
                      cj=np.zeros(cap, np.int32), cstart=np.zeros(n + 1, np.int64),
                      wf=np.zeros((0, NWF)),
@@ -199,7 +205,7 @@ class Simulation:
             ci = np.zeros(cap, np.int32)
             cj = np.zeros(cap, np.int32)
             fs = np.zeros(cap)
-            total = build_contacts(pf[X], pf[Y], pf[R], self.skin, st.sj_ptr, st.sj_adj,
+            total = build_contacts(pf[X], pf[Y], pf[R], self.skin, st.excl_ptr, st.excl_adj,
                                    old_start, old_cj, old_fs, cstart, ci, cj, fs, nch)
             if total <= cap:
                 break
@@ -234,6 +240,11 @@ class Simulation:
             m = pf[MASS]
             cf[C_CN, :nc], cf[C_CS, :nc] = dashpot_coefficients(
                 m[i], m[j], cf[C_KN, :nc], cf[C_KS, :nc], self.dashpot[0], self.dashpot[1])
+            pb = slice(0, st.npb)
+            bf = st.bf
+            bf[LCN, pb], bf[LCS, pb] = dashpot_coefficients(
+                m[st.bi[pb]], m[st.bj[pb]], bf[LKN, pb], bf[LKS, pb], self.dashpot[0],
+                self.dashpot[1])
         # contact and wall forces at the current positions (shear history carried over)
         self._refresh = True
         self._run(0)
@@ -329,7 +340,7 @@ class Simulation:
             if status == config.STATUS_UNSTABLE:
                 raise instability_error(int(info[1]), int(info[2]), self.step, self.dt,
                                         self.timestep_factor, (st.ci, st.cj), (st.qp, st.qw),
-                                        getattr(self, "_kspread", None))
+                                        getattr(self, "_kspread", None), (st.bi, st.bj))
             if status == config.STATUS_REBUILD:
                 self.rebuild()
 

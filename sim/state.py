@@ -24,8 +24,8 @@ FIX_ROTATION = 4
 
 # --- bond float table bf[row, b] ------------------------------------------------------------
 (FN, FS, MB, KNA, KSA, KNI, ARI, TENA, COHA, TANFA, NJX, NJY, UN, FRIC, TANDIL, SIZE, BRK_X,
- BRK_Y, BRK_NX, BRK_NY, BRK_STEP) = range(21)
-NBF = 21
+ BRK_Y, BRK_NX, BRK_NY, BRK_STEP, LFS, LFN, LKN, LKS, LMU, LCN, LCS) = range(28)
+NBF = 28
 
 
 # --- contact float table cf[row, c] ---------------------------------------------------------
@@ -56,11 +56,13 @@ class State:
     pf : (18, N) ndarray of float64
         Particle table, rows ``X, Y, VX, ...`` (see module constants).
     fix, mineral, grain : (N,) ndarray of int8, int32, int32
-    bf : (21, B) ndarray of float64
-        Bond table (forces, moments, constants, break records).
+    bf : (28, B) ndarray of float64
+        Bond table: bond forces, moment, constants, break records, and for parallel-bonded
+        pairs the linear contact part (rows LFS, LFN, LKN, LKS, LMU, LCN, LCS), which is
+        computed with the bond instead of in the Verlet contact list.
     bi, bj : (B,) int32; bkind, bstate : (B,) int8; bid : (B,) int64
         Pairs, kind (0 pb, 1 sj), state (0 intact, 1 tension, 2 shear), specimen bond index.
-    sj_ptr, sj_adj : CSR of smooth-joint partners (excluded from the contact list).
+    excl_ptr, excl_adj : CSR of bonded partners (excluded from the Verlet contact list).
     cf : (7, C) float64; ci, cj : (C,) int32; cstart : (N+1,) int64; nc : int
         Contact table, pairs and owner index (contacts of i are cstart[i]:cstart[i+1]).
     acc : (T, 4N) ndarray of float64
@@ -72,7 +74,7 @@ class State:
     """
 
     ARRAYS = ("pf", "fix", "mineral", "grain", "bf", "bi", "bj", "bkind", "bstate", "bid",
-              "sj_ptr", "sj_adj", "cf", "ci", "cj", "cstart", "wf", "qf", "qp", "qw", "logged")
+              "excl_ptr", "excl_adj", "cf", "ci", "cj", "cstart", "wf", "qf", "qp", "qw", "logged")
 
     def __init__(self, **arrays):
         for k in self.ARRAYS:

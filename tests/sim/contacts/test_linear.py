@@ -53,3 +53,23 @@ def test_two_disk_collision(beta):
         # the printed numerical check of REFERENCE.md at beta = 0.3
     if beta == 0.3:
         assert tc_ref == pytest.approx(2.6890e-3, rel=1e-4) and e_ref == pytest.approx(0.3723, rel=1e-3)
+
+
+def test_masked_law_matches_reference(rng):
+    from _reference import linear as ref_linear
+
+    from sim.contacts.linear import linear_force, linear_force_masked
+    for _ in range(500):
+        ov = rng.normal(0, 1e-6)
+        dus = rng.normal(0, 1e-7)
+        kn, ks = rng.uniform(1e8, 1e10, 2)
+        mu, fs = rng.uniform(0, 1), rng.normal(0, 1e3)
+        fn2, fs2, on = linear_force_masked(ov, dus, kn, ks, mu, fs)
+        if ov > 0:
+            want = ref_linear(ov, dus, kn, ks, mu, fs)
+            assert on == 1.0
+            np.testing.assert_allclose((fn2, fs2), want, rtol=1e-12)
+            np.testing.assert_allclose(linear_force(ov, dus, kn, ks, mu, fs)[:2], want,
+                                       rtol=1e-12)
+        else:
+            assert (fn2, fs2, on) == (0.0, 0.0, 0.0)
