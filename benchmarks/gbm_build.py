@@ -18,7 +18,6 @@ import os
 import platform
 import sys
 import time
-from importlib import resources
 
 import numpy as np
 
@@ -31,9 +30,9 @@ def main(argv=None):
 
     from gbmgen.build import build_grains, build_specimen
     from gbmgen.fidelity import fidelity_report
-    from gbmgen.table import read_table
+    from gbmgen.table import example_table
 
-    table = read_table(str(resources.files("gbmgen").joinpath("presets", "table_4_1.csv")))
+    table = example_table("table-4-1")
     t0 = time.perf_counter()
     build_specimen(table, width_mm=5, height_mm=10, seed=a.seed)
     warm = time.perf_counter() - t0

@@ -17,15 +17,10 @@ from sim.errors import InputError as SimInputError
 from . import __version__, config
 from .errors import InputError
 
-#: Shipped example tables, usable as ``--table NAME``.
-EXAMPLE_TABLES = {"table-4-1": "table_4_1.csv"}
 
-
-def _table_path(name):
-    if name in EXAMPLE_TABLES:
-        from importlib import resources
-        return str(resources.files("gbmgen").joinpath("presets", EXAMPLE_TABLES[name]))
-    return name
+def _read_table(name):
+    from .table import EXAMPLE_TABLES, example_table, read_table
+    return example_table(name) if name in EXAMPLE_TABLES else read_table(name)
 
 
 def _add_model_options(b):
@@ -205,9 +200,8 @@ def _build(a):
     from sim.specimen import Specimen  # noqa: F401  (fail early if sim is broken)
 
     from .build import build_specimen
-    from .table import read_table
 
-    table = read_table(_table_path(a.table)) if a.table else None
+    table = _read_table(a.table) if a.table else None
     if table is None and a.shape is None:
         raise InputError("--table: a grain-size table is needed (or give --shape)")
     t0 = time.perf_counter()

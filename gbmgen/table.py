@@ -19,7 +19,10 @@ import pandas as pd
 from . import config
 from .errors import InputError
 
-__all__ = ["GrainSizeTable", "read_table", "SCENARIOS"]
+__all__ = ["GrainSizeTable", "read_table", "example_table", "EXAMPLE_TABLES", "SCENARIOS"]
+
+#: Example tables shipped in ``gbmgen/presets`` (name -> YAML file).
+EXAMPLE_TABLES = {"table-4-1": "table_4_1.yaml"}
 
 #: Scenario number -> description (REFERENCE.md Ch. 4, Table 4-2).
 SCENARIOS = {1: "full observed range", 2: "10-90 % passing", 3: "mean +- 1/2 mean",
@@ -279,3 +282,25 @@ def read_table(path) -> GrainSizeTable:
         raise InputError(f"{path}: not a readable CSV ({exc})") from None
     df.columns = [str(c).strip() for c in df.columns]
     return GrainSizeTable.from_frame(df, source=path)
+
+
+def example_table(name="table-4-1") -> GrainSizeTable:
+    """A shipped example table: ``table-4-1`` is thesis Table 4-1 (SEM scale, um).
+
+    The same rows are in ``gbmgen/presets/table_4_1.csv`` (a ``grains.csv`` to copy).
+
+    Raises
+    ------
+    InputError
+        Unknown name.
+    """
+    from importlib import resources
+
+    import yaml
+
+    if name not in EXAMPLE_TABLES:
+        raise InputError(f"table: unknown example {name!r}, expected one of {list(EXAMPLE_TABLES)}")
+    text = resources.files("gbmgen").joinpath("presets", EXAMPLE_TABLES[name]).read_text()
+    data = yaml.safe_load(text)
+    df = pd.DataFrame(data["rows"], columns=data["columns"])
+    return GrainSizeTable.from_frame(df, source=name)

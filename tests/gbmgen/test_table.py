@@ -115,6 +115,16 @@ def test_table_4_1_model_scale_s1_and_mhi_order(table41):
         pytest.approx(mhi[0], rel=1e-12)
 
 
+def test_shipped_csv_equals_packaged_yaml(table41):
+    from gbmgen.table import example_table
+    y = example_table("table-4-1")
+    assert y.minerals == table41.minerals
+    for k in ("lo_um", "hi_um", "frequencies", "volume_fractions"):
+        np.testing.assert_array_equal(getattr(y, k), getattr(table41, k))
+    with pytest.raises(InputError, match="unknown example"):
+        example_table("table-9")
+
+
 def test_roundtrip_frame(table41):
     again = GrainSizeTable.from_frame(table41.to_frame())
     np.testing.assert_allclose(again.lo_um, table41.lo_um)
