@@ -5,6 +5,7 @@ Both are placed at random in the box and relaxed to a small overlap by
 """
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -220,4 +221,9 @@ def pack_particles(box, *, radius_mean_m, radius_ratio=config.RADIUS_RATIO,
     x, y, r = x[o], y[o], r[o]
     info = dict(info, iterations=info["iterations"] + total, n=int(r.size),
                 porosity=float(1.0 - np.sum(np.pi * r * r) / area))
+    if not info["converged"]:
+        warnings.warn(f"particle packing: largest overlap {info['max_overlap']:.3f} of a radius "
+                      f"after {info['iterations']} steps, above the tolerance {tol:g}; the "
+                      f"porosity {porosity:g} may be below what a 2D packing reaches "
+                      "without overlap (~0.16)", RuntimeWarning, stacklevel=2)
     return x, y, r, info

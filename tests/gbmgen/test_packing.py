@@ -37,3 +37,12 @@ def test_pack_seeds_overlap_and_radius(table41):
 def test_particle_radii():
     rmin, rmax = particle_radii(1e-4, 1.66)
     assert 0.5 * (rmin + rmax) == pytest.approx(1e-4) and rmax / rmin == pytest.approx(1.66)
+
+
+def test_too_dense_packing_warns():
+    from gbmgen.packing import pack_particles
+    box = np.array([0.0, 2e-3, 0.0, 2e-3])
+    with pytest.warns(RuntimeWarning, match="largest overlap"):
+        _, _, _, info = pack_particles(box, radius_mean_m=1e-4, porosity=0.05,
+                                       rng=np.random.default_rng(0), max_iter=300)
+    assert not info["converged"] and info["max_overlap"] > config.PARTICLE_OVERLAP_TOL
