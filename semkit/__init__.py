@@ -1,7 +1,52 @@
 """semkit: SEM micro-crack and grain statistics for rock mechanics.
 
-Importing this package does no work (no numba compilation, no matplotlib).
+The public API is a flat index of functions (scikit-image style); each name is imported from its
+module on first use (PEP 562), so importing this package does no work (no numba compilation, no
+matplotlib, no OpenCV).
+
+Stages (DESIGN.md §5): :func:`load_image` (1) -> :func:`flatten_illumination` (2) ->
+:func:`crack_mask` (3) -> :func:`remove_specks` / :func:`fill_holes` (4) -> :func:`label_cracks`,
+:func:`crack_table` (5) -> :func:`skeletonize`, :func:`skeleton_length` (6); all together in
+:func:`analyse_image` and :func:`analyse_folder`. Synthetic images with ground truth:
+:func:`make_sem_image`.
 """
 from .errors import InputError
 
-__all__ = ["InputError"]
+_LAZY = {
+    # stage 1: io
+    "load_image": "io", "read_image": "io", "resolve_pixel_size": "io",
+    "tiff_pixel_size": "io", "magnification_pixel_size": "io", "read_manifest": "io",
+    # stage 2
+    "flatten_illumination": "illumination", "illumination_field": "illumination",
+    # stage 3
+    "crack_mask": "threshold", "threshold_otsu": "threshold", "threshold_local": "threshold",
+    "threshold_auto": "threshold", "dark_class_levels": "threshold",
+    # stage 4
+    "denoise": "cleanup", "despeckle_median": "cleanup", "remove_specks": "cleanup",
+    "remove_small_objects": "cleanup", "fill_holes": "cleanup", "bridge_gaps": "cleanup",
+    # stages 5-6
+    "label_cracks": "measure", "crack_table": "measure", "partial_volume_area": "measure",
+    "skeletonize": "skeleton", "prune_spurs": "skeleton", "skeleton_length": "skeleton",
+    # pipeline, figures, synthetic data
+    "analyse_image": "pipeline", "analyse_folder": "pipeline", "AnalysisOptions": "pipeline",
+    "CrackAnalysis": "pipeline", "overlay_cracks": "plot", "plot_histograms": "plot",
+    "make_sem_image": "synth", "SynthImage": "synth", "write_sample_set": "synth",
+    # --- issue #3 names (grains, classify, indices, damage) go here ---
+    # --- end issue #3 ---
+}
+
+__all__ = ["InputError", *_LAZY]
+
+
+def __getattr__(name):
+    mod = _LAZY.get(name)
+    if mod is None:
+        raise AttributeError(f"module 'semkit' has no attribute {name!r}")
+    import importlib
+    value = getattr(importlib.import_module(f".{mod}", __name__), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__():
+    return sorted(set(globals()) | set(__all__))

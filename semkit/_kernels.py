@@ -378,16 +378,16 @@ def fill_background(img, known, rows, cols, n_rings, band, out):
         Excluded pixels still unfilled after ``n_rings`` rings.
     """
     k = rows.shape[0]
-    done = np.zeros(k, np.bool_)
+    act = np.arange(k)
     newv = np.empty(k, np.float32)
+    n_act = k
     for _ in range(n_rings):
         n_new = 0
-        for p in range(k):
-            newv[p] = np.float32(np.nan)
-            if done[p]:
-                continue
+        for q in range(n_act):
+            p = act[q]
             i = rows[p]
             j = cols[p]
+            newv[q] = np.float32(np.nan)
             m = np.float32(1e30)
             for di in range(-1, 2):
                 for dj in range(-1, 2):
@@ -395,24 +395,29 @@ def fill_background(img, known, rows, cols, n_rings, band, out):
                         m = out[i + di, j + dj]
             if m >= 1e30:
                 continue
-            s = 0.0
+            sm = 0.0
             c = 0
             for di in range(-1, 2):
                 for dj in range(-1, 2):
                     if known[i + di, j + dj] and out[i + di, j + dj] <= m + band:
-                        s += out[i + di, j + dj]
+                        sm += out[i + di, j + dj]
                         c += 1
-            newv[p] = s / c
+            newv[q] = sm / c
             n_new += 1
         if n_new == 0:
             break
-        for p in range(k):
-            if not done[p] and newv[p] == newv[p]:
-                out[rows[p], cols[p]] = newv[p]
+        # apply after deciding the whole ring (parallel semantics), then compact the list
+        keep = 0
+        for q in range(n_act):
+            p = act[q]
+            if newv[q] == newv[q]:
+                out[rows[p], cols[p]] = newv[q]
                 known[rows[p], cols[p]] = 1
-                done[p] = True
-    n_left = 0
-    for p in range(k):
-        if not done[p]:
-            n_left += 1
+            else:
+                act[keep] = p
+                keep += 1
+        n_act = keep
+        if n_act == 0:
+            break
+    n_left = n_act
     return n_left

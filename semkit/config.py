@@ -38,8 +38,6 @@ AUTO_SEED_SIGMAS = 6.0
 #: when no crack is wide enough to show its core grey, the core is taken as this share of the
 #: darkest mineral's grey at most (BSE: epoxy/void is near black).
 THIN_ONLY_CRACK_RATIO = 0.3
-#: box size (px) of the normalised convolution that estimates the local background of cracks.
-LOCAL_BACKGROUND_BOX_PX = 9
 #: background of an excluded pixel: mean of its known neighbours within this many noise
 #: sigmas of the darkest one (one phase, never a mix across a phase boundary).
 BACKGROUND_BAND_SIGMAS = 4.0

@@ -39,6 +39,7 @@ class DarkLevels:
     crack: float        #: crack core level (NaN when no dark class)
     seed: float         #: the dark-tail level, ``mineral - DARK_TAIL_SIGMAS * sigma``
     n_dark: int         #: pixels below ``seed``
+    noise: float = float("nan")  #: pixel-noise sigma (:func:`noise_sigma`)
 
 
 @dataclasses.dataclass
@@ -158,12 +159,14 @@ def dark_class_levels(image) -> DarkLevels:
     from scipy.ndimage import gaussian_filter1d
     from scipy.signal import find_peaks
     a = np.asarray(image, np.float32)
-    sub = a[::2, ::2] if a.size > 400_000 else a
+    step = max(int(np.ceil(np.sqrt(a.size / 300_000))), 1)
+    sub = np.ascontiguousarray(a[::step, ::step])
+    sn = noise_sigma(a)
     lo, hi = _percentiles(sub, (0.01, 99.99))
     if hi <= lo:
-        return DarkLevels(lo, 1.0, float("nan"), lo, 0)
-    closed = cv2.morphologyEx(np.ascontiguousarray(sub), cv2.MORPH_CLOSE,
-                              np.ones((11, 11) if sub is a else (7, 7), np.uint8))
+        return DarkLevels(lo, 1.0, float("nan"), lo, 0, sn)
+    ksz = max(11 // step, 5) | 1
+    closed = cv2.morphologyEx(sub, cv2.MORPH_CLOSE, np.ones((ksz, ksz), np.uint8))
     hc, c = _hist(closed.ravel(), lo, hi)
     hcs = gaussian_filter1d(hc, 2.0)
     peaks, _ = find_peaks(np.r_[0.0, hcs, 0.0], prominence=0.01 * hcs.max())
@@ -193,7 +196,7 @@ def dark_class_levels(image) -> DarkLevels:
     # the dark tail starts a few peak widths below the mineral, or (when the peak is wide
     # because grains differ, not because of noise) DARK_TAIL_NOISE_SIGMAS pixel-noise sigmas
     seed = mineral - min(config.DARK_TAIL_SIGMAS * sigma,
-                         max(3.0 * sigma, config.DARK_TAIL_NOISE_SIGMAS * noise_sigma(sub)))
+                         max(3.0 * sigma, config.DARK_TAIL_NOISE_SIGMAS * sn))
     tail = sub[sub < seed]
     n_dark = int(tail.size * a.size / max(sub.size, 1))
     crack = float("nan")
@@ -210,42 +213,30 @@ def dark_class_levels(image) -> DarkLevels:
             th, tc = _hist(tail, float(tail.min()), float(seed), bins=64)
             crack = min(float(tc[int(np.argmax(gaussian_filter1d(th, 1.5)))]),
                         config.THIN_ONLY_CRACK_RATIO * mineral)
-    return DarkLevels(mineral, float(sigma), crack, float(seed), n_dark)
+    return DarkLevels(mineral, float(sigma), crack, float(seed), n_dark, sn)
 
 
-def _local_background(img, exclude, size, band, n_rings=4):
+def _local_background(img, exclude, *, band, n_rings=4, max_rings=64):
     """Grey level the image would have without the excluded (dark) pixels.
 
     Known pixels keep their own value. Excluded pixels are filled ring by ring from their known
-    3 x 3 neighbours (``n_rings`` rings; :func:`semkit._kernels.fill_background`): of those
-    neighbours, the ones within ``band`` of the darkest are averaged, so next to a phase
-    boundary the rim of a crack, or the boundary line itself, takes the grey of one phase —
-    a plain box mean would mix a dark and a bright mineral and make the dark one look like
-    crack. Pixels deeper than ``n_rings`` (inside wide cracks, where the decision does not
-    depend on it) get the normalised box mean over ``size`` (4 x ``size`` where that is empty).
+    3 x 3 neighbours (:func:`semkit._kernels.fill_background`): of those neighbours, the ones
+    within ``band`` of the darkest are averaged, so next to a phase boundary the rim of a
+    crack, or the boundary line itself, takes the grey of one phase — a plain box mean would
+    mix a dark and a bright mineral and make the dark one look like crack. The first
+    ``n_rings`` rings decide the rim; filling goes on (up to ``max_rings``) into the core of wide
+    cracks, where the decision does not depend on it; anything left takes the median.
     """
-    import cv2
     from . import _kernels
-    h, w = img.shape
-    pad = lambda a, v: np.pad(a, 1, mode="constant", constant_values=v)  # noqa: E731
-    known = pad((~exclude).astype(np.uint8), 0)
-    out = pad(np.ascontiguousarray(img, np.float32), 0.0)
+    known = np.pad((~exclude).astype(np.uint8), 1, mode="constant", constant_values=0)
+    out = np.pad(np.ascontiguousarray(img, np.float32), 1, mode="constant", constant_values=0.0)
     rr, cc = np.nonzero(known[1:-1, 1:-1] == 0)
-    _kernels.fill_background(out, known, (rr + 1).astype(np.int64), (cc + 1).astype(np.int64),
-                             int(n_rings), float(band), out)
+    left = _kernels.fill_background(out, known, (rr + 1).astype(np.int64),
+                                    (cc + 1).astype(np.int64), int(max_rings), float(band), out)
     val = out[1:-1, 1:-1]
-    rest = known[1:-1, 1:-1] == 0
-    if rest.any():
-        wgt = (~exclude).astype(np.float32)
-        iw = img * wgt
-        for k in (int(size), 4 * int(size) + 1):
-            num = cv2.blur(iw, (k, k), borderType=cv2.BORDER_REFLECT)
-            den = cv2.blur(wgt, (k, k), borderType=cv2.BORDER_REFLECT)
-            ok = rest & (den > 0.02)
-            val[ok] = num[ok] / den[ok]
-            rest &= ~ok
-        if rest.any():
-            val[rest] = float(np.median(img[~exclude])) if (~exclude).any() else float(img.max())
+    if left:
+        rest = known[1:-1, 1:-1] == 0
+        val[rest] = float(np.median(img[~exclude])) if (~exclude).any() else float(img.max())
     return np.ascontiguousarray(val)
 
 
@@ -254,8 +245,12 @@ def noise_sigma(image) -> float:
     noise), on a subsample; smooth texture and grain contrast do not enter."""
     import cv2
     a = np.asarray(image, np.float32)
+    h, w = a.shape
+    if h * w > 512 * 512:  # a central crop is plenty
+        r0, c0 = max((h - 512) // 2, 0), max((w - 512) // 2, 0)
+        a = np.ascontiguousarray(a[r0:r0 + 512, c0:c0 + 512])
     hp = a - cv2.blur(a, (3, 3), borderType=cv2.BORDER_REFLECT)
-    v = hp[1:-1:3, 1:-1:3].ravel()
+    v = hp[1:-1:2, 1:-1:2].ravel()
     return float(1.4826 * np.median(np.abs(v - np.median(v))) / 0.943) + 1e-6
 
 
@@ -280,7 +275,7 @@ def threshold_auto(image, *, area_fraction=config.AUTO_AREA_FRACTION,
     if not np.isfinite(lv.crack) or lv.n_dark < 10:
         m = np.zeros(img.shape, bool)
         return ThresholdResult(m, m, "auto", lv.seed, 0.0, True, "no dark class")
-    sn = noise_sigma(img)
+    sn = lv.noise
     # exclude everything that might be crack (incl. its blurred rim) from the background:
     # darker than the darkest mineral, or a narrow dark line that a grey closing fills in
     closed = cv2.morphologyEx(img, cv2.MORPH_CLOSE, np.ones((7, 7), np.uint8))
@@ -289,14 +284,19 @@ def threshold_auto(image, *, area_fraction=config.AUTO_AREA_FRACTION,
         (line > config.AUTO_DETECT_SIGMAS * sn)
         & (line > config.CANDIDATE_LINE_FRACTION * (closed - lv.crack)))
     cand = cv2.dilate(cand.view(np.uint8), np.ones((5, 5), np.uint8)).view(bool)
-    bg = _local_background(img, cand, config.LOCAL_BACKGROUND_BOX_PX,
-                           band=config.BACKGROUND_BAND_SIGMAS * sn)
-    bg = np.maximum(bg, lv.mineral - 3.0 * lv.sigma)  # known pixels are never darker
-    contrast = np.maximum(bg - lv.crack, 1e-3)
-    depth = bg - img
-    area = depth > area_fraction * contrast
-    seed = depth > np.maximum(seed_fraction * contrast, config.AUTO_SEED_SIGMAS * sn)
-    detect = depth > np.maximum(detect_fraction * contrast, config.AUTO_DETECT_SIGMAS * sn)
+    bg = _local_background(img, cand, band=config.BACKGROUND_BAND_SIGMAS * sn)
+    # only candidates can differ from their background: decide there
+    idx = np.flatnonzero(cand)
+    b = np.maximum(bg.ravel()[idx], lv.mineral - 3.0 * lv.sigma)
+    contrast = np.maximum(b - lv.crack, 1e-3)
+    depth = b - img.ravel()[idx]
+    area = np.zeros(img.shape, bool)
+    seed = np.zeros(img.shape, bool)
+    detect = np.zeros(img.shape, bool)
+    area.ravel()[idx] = depth > area_fraction * contrast
+    seed.ravel()[idx] = depth > np.maximum(seed_fraction * contrast, config.AUTO_SEED_SIGMAS * sn)
+    detect.ravel()[idx] = depth > np.maximum(detect_fraction * contrast,
+                                             config.AUTO_DETECT_SIGMAS * sn)
     # hysteresis: keep weak components that hold a seed pixel
     n, lab = cv2.connectedComponents(detect.view(np.uint8), connectivity=8)
     keep = np.zeros(n, bool)

@@ -1,0 +1,15 @@
+"""The docstring examples of semkit's modules run and hold."""
+import doctest
+import importlib
+
+import pytest
+
+MODULES = ["io", "illumination", "threshold", "cleanup", "skeleton", "measure", "pipeline",
+           "synth"]
+
+
+@pytest.mark.parametrize("name", MODULES)
+def test_docstring_examples(name):
+    mod = importlib.import_module(f"semkit.{name}")
+    res = doctest.testmod(mod, optionflags=doctest.ELLIPSIS)
+    assert res.failed == 0 and res.attempted > 0
