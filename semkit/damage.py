@@ -430,7 +430,7 @@ def science_stage(analysis, cracks, row, *, manifest_row=None, overlay_dir=None)
         names, n = parse_minerals(getattr(opts, "minerals", None))
         grain_labels, ph, grains_df = grains_stage(
             analysis.flat, mask=analysis.object_mask, pixel_size_um=analysis.pixel_size_um,
-            names=names, n_phases=n)
+            names=names, n_phases=n, alt_image=analysis.image)
         grains_df.insert(0, "image", analysis.name)
         if overlay_dir is not None:
             import pathlib

@@ -22,7 +22,7 @@ from scipy import ndimage as ndi
 
 from .errors import InputError
 
-__all__ = ["mineral_phases", "segment_grains", "grain_table", "grain_size_table",
+__all__ = ["mineral_phases", "phase_separability", "segment_grains", "grain_table", "grain_size_table",
            "slenderness", "plot_grain_histograms", "plot_grain_map",
            "AUTO_CLASS_PERCENTILES"]
 
@@ -527,8 +527,30 @@ def plot_grain_map(grain_labels, phase_labels=None, path=None, *, seed=0):
     return fig
 
 
+def phase_separability(image, n_phases, *, mask=None, median_px=PHASE_MEDIAN_PX):
+    """Otsu's effectiveness eta = between-class / total grey variance of the phase split.
+
+    Used to choose between the raw and the illumination-flattened image: a real lighting
+    gradient smears the phase peaks of the raw image, a wrong flattening those of the flat one.
+    """
+    from skimage.filters import threshold_multiotsu
+    g = _median(_as_grey(image), median_px)
+    x = g if mask is None else g[~np.asarray(mask, bool)]
+    x = x.ravel()
+    if x.size > 200_000:
+        x = x[:: int(np.ceil(x.size / 200_000))]
+    var = x.var()
+    if var <= 0:
+        return 0.0
+    cls = np.digitize(x, threshold_multiotsu(x, classes=n_phases))
+    mu = x.mean()
+    between = sum((cls == k).mean() * (x[cls == k].mean() - mu) ** 2
+                  for k in range(n_phases) if (cls == k).any())
+    return float(between / var)
+
+
 def grains_stage(image, *, mask=None, pixel_size_um=1.0, names=None, n_phases=3,
-                 min_diameter_um=None, seed=None):
+                 min_diameter_um=None, seed=None, alt_image=None):
     """Phases, grains and the per-grain table of one image (the ``--grains`` stage).
 
     Parameters
@@ -545,6 +567,9 @@ def grains_stage(image, *, mask=None, pixel_size_um=1.0, names=None, n_phases=3,
     min_diameter_um : float, optional
         Smallest grain resolved; default 8 px.
     seed : int, optional
+    alt_image : (M, N) ndarray, optional
+        A second version of the image (e.g. raw when ``image`` is flattened); the one whose
+        phases separate better (:func:`phase_separability`) is used.
 
     Returns
     -------
@@ -553,6 +578,9 @@ def grains_stage(image, *, mask=None, pixel_size_um=1.0, names=None, n_phases=3,
         :func:`grain_table` output.
     """
     n = len(names) if names else int(n_phases)
+    if alt_image is not None and phase_separability(alt_image, n, mask=mask) > \
+            phase_separability(image, n, mask=mask):
+        image = alt_image
     ph, _ = mineral_phases(image, n, mask=mask, seed=seed)
     dmin = 8.0 if min_diameter_um is None else max(min_diameter_um / pixel_size_um, 2.0)
     lab = segment_grains(image, phase_labels=ph, mask=mask, min_diameter_px=dmin)
@@ -621,7 +649,7 @@ def analyse_grains_folder(folder, out, *, minerals=None, classes=None, pixel_siz
         li = load_image(p, manifest_row=mrows.get(p.name), pixel_size_um=pixel_size_um)
         a = CrackAnalysis(li.image, pixel_size_um=li.pixel_size_um, name=p.name, options=opts)
         lab, ph, g = grains_stage(a.flat, mask=a.object_mask, pixel_size_um=li.pixel_size_um,
-                                  names=names, n_phases=n, seed=seed)
+                                  names=names, n_phases=n, seed=seed, alt_image=a.image)
         g.insert(0, "image", p.name)
         tables.append(g)
         import matplotlib.pyplot as plt
