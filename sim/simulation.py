@@ -176,7 +176,7 @@ class Simulation:
         excl_ptr, excl_adj = partner_csr(n, bi, bj)
         cap = 0
         return State(pf=pf, fix=np.zeros(n, np.int8), mineral=sp.mineral.copy(),
-                     grain=sp.grain.copy(), bf=bf, bi=bi, bj=bj,
+                     grain=sp.grain.copy(), pid=np.arange(n, dtype=np.int64), bf=bf, bi=bi, bj=bj,
                      bkind=bkind, bstate=np.zeros(nb, np.int8), bid=order.astype(np.int64),
                      excl_ptr=excl_ptr, excl_adj=excl_adj,
                      cf=np.zeros((NCF, cap)), ci=np.zeros(cap, np.int32),
@@ -582,15 +582,16 @@ class Simulation:
     def grain(self):
         return self.state.grain
 
-    def _to_specimen_order(self, a):
-        out = np.empty_like(a)
+    def _to_specimen_order(self, a, fill=0):
+        out = np.full(self.specimen.n_bonds, fill, dtype=a.dtype)
         out[self.state.bid] = a
         return out
 
     @property
     def bond_state(self):
-        """(B,) int8 in specimen bond order: 0 intact, 1 broken in tension, 2 in shear."""
-        return self._to_specimen_order(self.state.bstate)
+        """(B,) int8 in specimen bond order: 0 intact, 1 broken in tension, 2 in shear,
+        3 removed with a particle (:meth:`remove_particles`)."""
+        return self._to_specimen_order(self.state.bstate, fill=3)
 
     @property
     def bond_intact(self):
@@ -603,6 +604,61 @@ class Simulation:
         bf = self.state.bf
         from .state import FN, FS, MB
         return tuple(self._to_specimen_order(bf[k]) for k in (FN, FS, MB))
+
+    @property
+    def particle_id(self):
+        """(N,) specimen index of each current particle (identity until particles are removed)."""
+        return self.state.pid
+
+    def remove_particles(self, mask) -> int:
+        """Delete particles (e.g. excavation) with their bonds and contacts, then re-list.
+
+        Parameters
+        ----------
+        mask : (N,) bool or index array
+            Particles to remove (current indexing).
+
+        Returns
+        -------
+        n_removed : int
+
+        Notes
+        -----
+        Remaining particles are renumbered in order (see :attr:`particle_id`); bonds touching
+        a removed particle get state 3 in :attr:`bond_state`; shear histories of the remaining
+        contacts are kept. Forces are re-evaluated at once, so the removed particles' pull or
+        push vanishes in the next step (an instantaneous excavation).
+        """
+        st = self.state
+        gone = np.zeros(st.n, bool)
+        gone[self._idx(mask)] = True
+        if not gone.any():
+            return 0
+        if gone.all():
+            raise InputError("mask: would remove every particle")
+        keep = ~gone
+        new = np.cumsum(keep) - 1
+        kb = keep[st.bi] & keep[st.bj]
+        bi, bj = new[st.bi[kb]].astype(np.int32), new[st.bj[kb]].astype(np.int32)
+        n = int(keep.sum())
+        kc = keep[st.ci[:st.nc]] & keep[st.cj[:st.nc]]
+        ci, cj = new[st.ci[:st.nc][kc]].astype(np.int32), new[st.cj[:st.nc][kc]].astype(np.int32)
+        cf = st.cf[:, :st.nc][:, kc]
+        cstart = np.zeros(n + 1, np.int64)
+        np.add.at(cstart, ci.astype(np.int64) + 1, 1)
+        kq = keep[st.qp[:st.nq]]
+        qp, qw = new[st.qp[:st.nq][kq]].astype(np.int32), st.qw[:st.nq][kq]
+        excl_ptr, excl_adj = partner_csr(n, bi, bj)
+        pf = st.pf[:, keep].copy()
+        self.state = State(pf=pf, fix=st.fix[keep], mineral=st.mineral[keep],
+                           grain=st.grain[keep], pid=st.pid[keep], bf=st.bf[:, kb].copy(),
+                           bi=bi, bj=bj, bkind=st.bkind[kb], bstate=st.bstate[kb],
+                           bid=st.bid[kb], excl_ptr=excl_ptr, excl_adj=excl_adj, cf=cf.copy(),
+                           ci=ci, cj=cj, cstart=np.cumsum(cstart), wf=st.wf, qf=st.qf[:, kq],
+                           qp=qp, qw=qw, logged=st.logged[kb], nc=int(kc.sum()),
+                           nq=int(kq.sum()), npb=int(np.sum(st.bkind[kb] == 0)))
+        self.rebuild()
+        return int(gone.sum())
 
     # ------------------------------------------------------------------ checkpoint
     def save(self, path) -> None:

@@ -56,6 +56,8 @@ class State:
     pf : (18, N) ndarray of float64
         Particle table, rows ``X, Y, VX, ...`` (see module constants).
     fix, mineral, grain : (N,) ndarray of int8, int32, int32
+    pid : (N,) ndarray of int64
+        Specimen index of each particle (differs from the position once particles are removed).
     bf : (28, B) ndarray of float64
         Bond table: bond forces, moment, constants, break records, and for parallel-bonded
         pairs the linear contact part (rows LFS, LFN, LKN, LKS, LMU, LCN, LCS), which is
@@ -73,7 +75,7 @@ class State:
         Walls and wall contacts.
     """
 
-    ARRAYS = ("pf", "fix", "mineral", "grain", "bf", "bi", "bj", "bkind", "bstate", "bid",
+    ARRAYS = ("pf", "fix", "mineral", "grain", "pid", "bf", "bi", "bj", "bkind", "bstate", "bid",
               "excl_ptr", "excl_adj", "cf", "ci", "cj", "cstart", "wf", "qf", "qp", "qw", "logged")
 
     def __init__(self, **arrays):

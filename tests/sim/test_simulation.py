@@ -161,3 +161,30 @@ def test_fix_and_free_and_bad_input():
         sim.add_wall((0, 0), (0, 0))
     with pytest.raises(InputError, match="wall 5"):
         sim.wall_force(5)
+
+
+def test_remove_particles_excavates_a_hole():
+    s = Specimen.lattice(nx=16, ny=16, radius=1e-3, gap=2e-3)
+    sim = Simulation(s, damping=0.7)
+    b = s.box
+    sim.add_wall((0.0, b[2]), (0.0, 1.0))
+    top = sim.add_wall((0.0, b[3]), (0.0, -1.0))
+    sim.set_servo(top, 1e6, b[1] - b[0])
+    sim.cycle(2000)
+    cx, cy = sim.x.mean(), sim.y.mean()
+    hole = np.hypot(sim.x - cx, sim.y - cy) < 4e-3
+    kept_ids = sim.particle_id[~hole]
+    n_bonds_hole = int(np.sum(hole[s.bond_i] | hole[s.bond_j]))
+    assert sim.remove_particles(hole) == hole.sum() > 5
+    assert sim.n_particles == s.n_particles - hole.sum()
+    np.testing.assert_array_equal(sim.particle_id, kept_ids)
+    assert np.sum(sim.bond_state == 3) == n_bonds_hole
+    assert sim.bond_state.shape == (s.n_bonds,)
+    sim.cycle(2000)
+    assert np.all(np.isfinite(sim.x))
+    # the servo still holds the platen stress around the hole
+    assert sim.wall_stress(top, b[1] - b[0]) == pytest.approx(1e6, rel=1e-2)
+    # nothing sits inside the hole any more
+    assert np.min(np.hypot(sim.x - cx, sim.y - cy)) > 2e-3
+    with pytest.raises(InputError, match="every particle"):
+        sim.remove_particles(np.ones(sim.n_particles, bool))
