@@ -73,7 +73,7 @@ def _assign_minerals_by_area(areas, fractions, rng):
 def build_grains(table: GrainSizeTable | None = None, *, width_mm, height_mm, scenario=1,
                  scale=1.0, model_scale=config.MODEL_SCALE, tessellation="laguerre",
                  fit_areas=True, shape=None, slenderness=1.0,
-                 grain_area_mm2=config.GRAIN_AREA_MM2, seed=None) -> BuildResult:
+                 grain_area_mm2=config.GRAIN_AREA_MM2, ranges_mm=None, seed=None) -> BuildResult:
     """The grain structure of a specimen.
 
     Parameters
@@ -99,6 +99,10 @@ def build_grains(table: GrainSizeTable | None = None, *, width_mm, height_mm, sc
         H/W of controlled grains.
     grain_area_mm2 : float
         Area of controlled grains, mm^2.
+    ranges_mm : dict, optional
+        {mineral: (d_min, d_max)} at model scale, mm: explicit size ranges instead of the
+        scenario rule (e.g. the thesis' printed Table 4-2 ranges); the class edges are mapped
+        linearly as for a scenario; ``scale`` still applies, ``model_scale`` does not.
     seed : int, optional
         Random seed (``np.random.default_rng``).
 
@@ -132,7 +136,11 @@ def build_grains(table: GrainSizeTable | None = None, *, width_mm, height_mm, sc
         raise InputError(f"tessellation: expected one of {TESSELLATIONS}, got {tessellation!r}")
     if not (np.isfinite(model_scale) and model_scale > 0):
         raise InputError(f"model_scale: expected > 0, got {model_scale!r}")
-    scn = table.scenario(int(scenario), scale=float(scale) * float(model_scale))
+    if ranges_mm is not None:
+        scn = table.with_ranges({k: (1e3 * v[0], 1e3 * v[1]) for k, v in ranges_mm.items()},
+                                scale=float(scale), label="ranges_mm")
+    else:
+        scn = table.scenario(int(scenario), scale=float(scale) * float(model_scale))
     seeds = pack_seeds(scn, box, rng=rng)
     timing["seeds"] = time.perf_counter() - t0
     t0 = time.perf_counter()
@@ -172,7 +180,8 @@ def build_grains(table: GrainSizeTable | None = None, *, width_mm, height_mm, sc
     info = {"kind": "tessellation", "tessellation": tessellation,
             "laguerre_weights": ("fitted to target areas" if fit_areas else "seed radius^2")
             if tessellation == "laguerre" else None,
-            "weight_fit": fit, "scenario": int(scenario), "scale": float(scale),
+            "weight_fit": fit, "scenario": None if ranges_mm else int(scenario),
+            "ranges_mm": ranges_mm, "scale": float(scale),
             "model_scale": float(model_scale), "n_seeds": int(seeds.x.size),
             "seed_relaxation": seeds.info, "voronoi_same_seeds": compare,
             "scenario_ranges_mm": {name: [float(v) for v in scn.range_um()[k] / 1000.0]
@@ -183,7 +192,7 @@ def build_grains(table: GrainSizeTable | None = None, *, width_mm, height_mm, sc
 def build_specimen(table: GrainSizeTable | None = None, *, width_mm, height_mm, scenario=1,
                    scale=1.0, model_scale=config.MODEL_SCALE, tessellation="laguerre",
                    fit_areas=True, shape=None, slenderness=1.0,
-                   grain_area_mm2=config.GRAIN_AREA_MM2,
+                   grain_area_mm2=config.GRAIN_AREA_MM2, ranges_mm=None,
                    particle_radius_mm=config.PARTICLE_RADIUS_MM,
                    radius_ratio=config.RADIUS_RATIO, porosity=config.POROSITY,
                    bond_gap_mm=None, params: str | Params = config.DEFAULT_PARAMS,
@@ -193,7 +202,7 @@ def build_specimen(table: GrainSizeTable | None = None, *, width_mm, height_mm, 
     Parameters
     ----------
     table, width_mm, height_mm, scenario, scale, model_scale, tessellation, fit_areas, shape,
-    slenderness, grain_area_mm2
+    slenderness, grain_area_mm2, ranges_mm
         As :func:`build_grains`.
     particle_radius_mm : float
         Mean particle radius, mm (radii uniform on [rmin, radius_ratio rmin]).
@@ -229,7 +238,7 @@ def build_specimen(table: GrainSizeTable | None = None, *, width_mm, height_mm, 
     res = build_grains(table, width_mm=width_mm, height_mm=height_mm, scenario=scenario,
                        scale=scale, model_scale=model_scale, tessellation=tessellation,
                        fit_areas=fit_areas, shape=shape, slenderness=slenderness,
-                       grain_area_mm2=grain_area_mm2, seed=seed)
+                       grain_area_mm2=grain_area_mm2, ranges_mm=ranges_mm, seed=seed)
     timing = dict(res.timing_s)
     g = res.grains
     names = list(table.minerals) if table is not None else [next(iter(prm.minerals))]

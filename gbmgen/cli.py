@@ -23,10 +23,29 @@ def _read_table(name):
     return example_table(name) if name in EXAMPLE_TABLES else read_table(name)
 
 
+def _parse_ranges(text):
+    """``"a:0.1:1.2,b:0.2:0.9"`` -> {"a": (0.1, 1.2), "b": (0.2, 0.9)} (mm)."""
+    out = {}
+    for part in str(text).split(","):
+        bits = part.strip().split(":")
+        try:
+            out[bits[0].strip()] = (float(bits[1]), float(bits[2]))
+            if len(bits) != 3:
+                raise ValueError
+        except (IndexError, ValueError):
+            raise argparse.ArgumentTypeError(
+                f"--ranges-mm: expected MINERAL:LO:HI[,...], got {part!r}") from None
+    return out
+
+
 def _add_model_options(b):
     """Options shared by build and run (size scenario, tessellation, particles, params)."""
     b.add_argument("--scenario", type=int, default=1, choices=(1, 2, 3, 4),
                    help="size range: 1 full, 2 10-90%% passing, 3 mean±½mean, 4 mean±¼mean")
+    b.add_argument("--ranges-mm", type=_parse_ranges, default=None,
+                   metavar="MINERAL:LO:HI,...",
+                   help="explicit size ranges at model scale instead of --scenario, e.g. "
+                        "pyroxene:0.22:1.24,plagioclase:0.16:0.99,biotite:0.15:0.80")
     b.add_argument("--scale", type=float, default=1.0, help="grain-size factor (e.g. 1.5)")
     b.add_argument("--model-scale", type=float, default=config.MODEL_SCALE,
                    help="model size / table size (thesis: 10 x SEM scale) [%(default)s]")
@@ -209,7 +228,7 @@ def _build(a):
         table, width_mm=a.width_mm, height_mm=a.height_mm, scenario=a.scenario, scale=a.scale,
         model_scale=a.model_scale, tessellation=a.tessellation, fit_areas=a.fit_areas,
         shape=a.shape, slenderness=a.slenderness, grain_area_mm2=a.grain_area_mm2,
-        particle_radius_mm=a.particle_radius_mm, radius_ratio=a.radius_ratio,
+        ranges_mm=a.ranges_mm, particle_radius_mm=a.particle_radius_mm, radius_ratio=a.radius_ratio,
         porosity=a.porosity, bond_gap_mm=a.bond_gap_mm, params=a.params, seed=a.seed)
     t1 = time.perf_counter()
     spec.save(a.out)
@@ -241,7 +260,8 @@ def _run(a):
     summary = run(a.images, a.out, minerals=a.minerals, classes=a.classes,
                   pixel_size_um=a.pixel_size_um, cracks=a.cracks, jobs=a.jobs,
                   progress=not a.no_progress, seed=a.seed, scenario=a.scenario, scale=a.scale,
-                  model_scale=a.model_scale, width_mm=a.width_mm, height_mm=a.height_mm,
+                  model_scale=a.model_scale, ranges_mm=a.ranges_mm,
+                  width_mm=a.width_mm, height_mm=a.height_mm,
                   tessellation=a.tessellation, fit_areas=a.fit_areas,
                   particle_radius_mm=a.particle_radius_mm, radius_ratio=a.radius_ratio,
                   porosity=a.porosity, bond_gap_mm=a.bond_gap_mm, params=a.params)

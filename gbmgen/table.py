@@ -243,14 +243,49 @@ class GrainSizeTable:
         -------
         table : GrainSizeTable
         """
+        return self.with_ranges(self.scenario_ranges_um(int(scenario)), scale=scale,
+                                label=f"scenario {int(scenario)}")
+
+    def with_ranges(self, ranges_um, *, scale: float = 1.0, label="ranges") -> "GrainSizeTable":
+        """The table with each mineral's size range replaced (class edges mapped linearly).
+
+        Parameters
+        ----------
+        ranges_um : (M, 2) array_like or dict
+            New [d_min, d_max] per mineral, um (a dict maps mineral name -> (lo, hi); every
+            mineral of the table must be given).
+        scale : float
+            Size factor applied after the mapping.
+
+        Returns
+        -------
+        table : GrainSizeTable
+
+        Raises
+        ------
+        InputError
+            A mineral missing from ``ranges_um``, or a range with not 0 < lo < hi.
+        """
         if not (np.isfinite(scale) and scale > 0):
             raise InputError(f"scale: expected a positive factor, got {scale!r}")
-        rng_um = self.scenario_ranges_um(int(scenario))
+        if isinstance(ranges_um, dict):
+            missing = [m for m in self.minerals if m not in ranges_um]
+            if missing:
+                raise InputError(f"ranges: no range for mineral(s) {missing}")
+            extra = [m for m in ranges_um if m not in self.minerals]
+            if extra:
+                raise InputError(f"ranges: mineral(s) {extra} are not in {self.source}")
+            ranges_um = [ranges_um[m] for m in self.minerals]
+        rng_um = np.asarray(ranges_um, float).reshape(self.n_minerals, 2)
+        for k, (lo_k, hi_k) in enumerate(rng_um):
+            if not (np.isfinite(lo_k) and np.isfinite(hi_k) and 0 < lo_k < hi_k):
+                raise InputError(f"ranges: {self.minerals[k]!r} has [{lo_k:g}, {hi_k:g}] um, "
+                                 "expected 0 < d_min < d_max")
         full = self.range_um()
         a = (rng_um[:, 1] - rng_um[:, 0]) / (full[:, 1] - full[:, 0])
         lo = (rng_um[:, :1] + (self.lo_um - full[:, :1]) * a[:, None]) * scale
         hi = (rng_um[:, :1] + (self.hi_um - full[:, :1]) * a[:, None]) * scale
-        src = f"{self.source} [scenario {int(scenario)}, x{scale:g}]"
+        src = f"{self.source} [{label}, x{scale:g}]"
         return GrainSizeTable(minerals=self.minerals, lo_um=lo, hi_um=hi,
                               frequencies=self.frequencies.copy(),
                               volume_fractions=self.volume_fractions.copy(), source=src)

@@ -50,3 +50,16 @@ def test_bad_table_exit_2(tmp_path, capsys):
     assert "row 1" in err[0] and "'d_min_um'" in err[0] and str(bad) in err[0]
     assert not (tmp_path / "x.npz").exists()
     assert main(["info", str(tmp_path / "missing.npz")]) == 2
+
+
+def test_build_with_thesis_ranges(tmp_path, capsys):
+    out = tmp_path / "r.npz"
+    rc = main(["build", "--table", "table-4-1", "--ranges-mm",
+               "pyroxene:0.22:1.24,plagioclase:0.16:0.99,biotite:0.15:0.80",
+               "--width-mm", "5", "--height-mm", "10", "--seed", "4", "--out", str(out),
+               "--json"])
+    assert rc == 0
+    s = Specimen.load(out)
+    np.testing.assert_allclose(s.meta["grains"]["scenario_ranges_mm"]["plagioclase"],
+                               [0.16, 0.99])
+    assert s.meta["scenario"] is None

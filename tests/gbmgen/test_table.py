@@ -129,3 +129,14 @@ def test_roundtrip_frame(table41):
     again = GrainSizeTable.from_frame(table41.to_frame())
     np.testing.assert_allclose(again.lo_um, table41.lo_um)
     np.testing.assert_allclose(again.frequencies, table41.frequencies)
+
+
+def test_explicit_ranges(table41):
+    r = table41.with_ranges({"pyroxene": (220, 1240), "plagioclase": (160, 990),
+                             "biotite": (150, 800)})
+    np.testing.assert_allclose(r.range_um(), [[220, 1240], [160, 990], [150, 800]])
+    np.testing.assert_allclose(r.frequencies, table41.frequencies)
+    with pytest.raises(InputError, match="no range for mineral"):
+        table41.with_ranges({"pyroxene": (1, 2)})
+    with pytest.raises(InputError, match="0 < d_min < d_max"):
+        table41.with_ranges({"pyroxene": (2, 1), "plagioclase": (1, 2), "biotite": (1, 2)})
