@@ -38,6 +38,8 @@ AUTO_SEED_SIGMAS = 6.0
 #: when no crack is wide enough to show its core grey, the core is taken as this share of the
 #: darkest mineral's grey at most (BSE: epoxy/void is near black).
 THIN_ONLY_CRACK_RATIO = 0.3
+#: when nothing is darker than the darkest mineral, the crack grey is this low percentile.
+DARKEST_PERCENT = 0.2
 #: background of an excluded pixel: mean of its known neighbours within this many noise
 #: sigmas of the darkest one (one phase, never a mix across a phase boundary).
 BACKGROUND_BAND_SIGMAS = 4.0
@@ -83,3 +85,74 @@ LENGTH_TOL_MEDIAN = 0.03
 LENGTH_TOL_MAX = 0.08
 THIN_LENGTH_TOL = 0.15
 SPURIOUS_AREA_MAX = 0.01
+
+# --- issue #3: crack types, grains, P (semkit.classify / grains / damage) -----------------
+# classify
+#: He et al.: share of the crack along grain boundaries above which it is inter-granular.
+INTER_MIN_FRACTION = 0.86
+#: He et al.: share of the crack inside one grain above which it is intra-granular.
+INTRA_MIN_FRACTION = 0.80
+#: a skeleton pixel is "on a boundary" within this many px beyond the local half-aperture.
+BOUNDARY_TOL_PX = 1.5
+#: half-size of the feature window around each skeleton pixel, px.
+WINDOW_PX = 10
+#: a small object (debris, fragment) within this distance (px) of a large crack takes its type.
+LINK_PX = 8
+#: objects with fewer pixels than this are "small" (debris, fragments).
+SMALL_OBJECT_PX = 40
+#: a trace is mixed when its long tensile runs and its long shear runs each make up at least
+#: this share of its skeleton (runs of the smoothed per-pixel decision, >= MIN_RUN_PX long).
+MIXED_SHARE = 0.2
+#: running-mean window (px) along a branch before runs are measured.
+RUN_SMOOTH_PX = 15
+#: shortest run (px) of one type that counts as a segment of a mixed crack.
+MIN_RUN_PX = 25
+#: skeleton branches shorter than this (px) are spurs/steps: typed by their neighbours.
+SHORT_BRANCH_PX = 12
+#: branches meeting at a junction within this angle of a straight continuation are one trace.
+CONTINUE_DEG = 35.0
+#: branch ends closer than this (px) meet at one junction.
+JUNCTION_PX = 4.0
+#: branch ends of different objects up to this far apart (px), facing each other within
+#: CONTINUE_DEG, continue one trace across the gap (a crack broken by the threshold).
+GAP_PX = 8.0
+# grains
+#: automatic class edges: these count percentiles of the equivalent diameters of each mineral.
+AUTO_CLASS_PERCENTILES = (10.0, 90.0)
+#: Gaussian denoising (px) before boundary detection.
+GRAIN_DENOISE_SIGMA_PX = 1.0
+#: median filter (px, odd) before phase classification: removes 1-2 px boundary lines.
+PHASE_MEDIAN_PX = 5
+#: Gaussian denoising (px) after the median, before phase classification.
+PHASE_SIGMA_PX = 0.0
+#: scale (px) of the dark-ridge filter that finds faint boundaries inside one phase.
+RIDGE_SIGMA_PX = 1.0
+#: h of the h-maxima transform of the distance map that seeds the watershed, in px.
+MARKER_H_PX = 2.0
+#: a pixel whose boundary strength (gradient or ridge response over its image median, i.e. in
+#: units of the noise level) exceeds this is "boundary" when seeding the watershed.
+BOUNDARY_LEVEL = 6.0
+#: EM iterations of the 1-D Gaussian mixture.
+GMM_ITERATIONS = 100
+# damage
+#: Order of the loading stages on the P-by-stage plot and in ``damage.csv``.
+STAGE_ORDER = ("pre-test", "initiating", "propagation", "failure")
+#: Modified z-score above which an image's P is flagged as an outlier.
+OUTLIER_Z = 3.5
+#: Fewest finite P values in a test for the outlier rule to apply.
+OUTLIER_MIN_N = 5
+#: band (px) around the crack objects over which partial-volume darkness is summed.
+PV_BAND_PX = 2
+#: Gaussian sigma (px) of the local-background estimate for the partial-volume area.
+PV_BACKGROUND_SIGMA_PX = 4.0
+# targets of issue #3 (tests assert these or say why not)
+#: grain segmentation: mineral area fractions (absolute), median diameter, count (relative).
+GRAIN_FRACTION_TOL_ABS = 0.02
+GRAIN_MEDIAN_D_TOL = 0.05
+GRAIN_COUNT_TOL = 0.10
+#: crack-type accuracy by crack area (pre-existing with a known grain map; post-test).
+PRE_TYPE_ACCURACY_MIN = 0.90
+POST_TYPE_ACCURACY_TARGET = 0.90
+#: per-image P against truth, median relative error.
+P_TOL_MEDIAN = 0.15
+# --- end issue #3 ---------------------------------------------------------------------------

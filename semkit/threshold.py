@@ -272,9 +272,17 @@ def threshold_auto(image, *, area_fraction=config.AUTO_AREA_FRACTION,
     import cv2
     img = np.asarray(image, np.float32)
     lv = dark_class_levels(img)
+    note0 = ""
     if not np.isfinite(lv.crack) or lv.n_dark < 10:
-        m = np.zeros(img.shape, bool)
-        return ThresholdResult(m, m, "auto", lv.seed, 0.0, True, "no dark class")
+        # nothing darker than the darkest mineral phase (e.g. a dark biotite as dark as the
+        # cracks in a bright mineral): take the crack grey from the darkest pixels and find
+        # cracks as narrow dark lines only (the closing criterion below)
+        lo = _percentiles(img[::2, ::2], (config.DARKEST_PERCENT,))[0]
+        if not lo < lv.mineral - config.AUTO_SEED_SIGMAS * lv.noise:
+            m = np.zeros(img.shape, bool)
+            return ThresholdResult(m, m, "auto", lv.seed, 0.0, True, "no dark class")
+        lv = dataclasses.replace(lv, crack=float(lo))
+        note0 = "no dark tail below the darkest mineral: cracks found as narrow dark lines"
     sn = lv.noise
     # exclude everything that might be crack (incl. its blurred rim) from the background:
     # darker than the darkest mineral, or a narrow dark line that a grey closing fills in
@@ -307,6 +315,7 @@ def threshold_auto(image, *, area_fraction=config.AUTO_AREA_FRACTION,
     frac = float(area.mean())
     value = 0.5 * (lv.mineral + lv.crack)
     ok, note = _check_dark_class(img, area, frac, lv)
+    note = "; ".join(t for t in (note0, note) if t)
     return ThresholdResult(area, detect, "auto", value, frac, ok, note, background=bg,
                            crack_level=lv.crack)
 
