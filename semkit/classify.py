@@ -25,6 +25,7 @@ import numpy as np
 import pandas as pd
 from scipy import ndimage as ndi
 
+from . import config
 from .errors import InputError
 
 __all__ = ["classify_pre", "post_features", "classify_post", "train_post", "save_model",
@@ -32,33 +33,33 @@ __all__ = ["classify_pre", "post_features", "classify_post", "train_post", "save
            "INTER_MIN_FRACTION", "INTRA_MIN_FRACTION"]
 
 #: He et al.: share of the crack along grain boundaries above which it is inter-granular.
-INTER_MIN_FRACTION = 0.86
+INTER_MIN_FRACTION = config.INTER_MIN_FRACTION
 #: He et al.: share of the crack inside one grain above which it is intra-granular.
-INTRA_MIN_FRACTION = 0.80
+INTRA_MIN_FRACTION = config.INTRA_MIN_FRACTION
 #: a skeleton pixel is "on a boundary" within this many px beyond the local half-aperture.
-BOUNDARY_TOL_PX = 1.5
+BOUNDARY_TOL_PX = config.BOUNDARY_TOL_PX
 #: half-size of the feature window around each skeleton pixel, px.
-WINDOW_PX = 10
+WINDOW_PX = config.WINDOW_PX
 #: a small object (debris, fragment) within this distance (px) of a large crack takes its type.
-LINK_PX = 8
+LINK_PX = config.LINK_PX
 #: objects with fewer pixels than this are "small" (debris, fragments).
-SMALL_OBJECT_PX = 40
+SMALL_OBJECT_PX = config.SMALL_OBJECT_PX
 #: a trace is mixed when its long tensile runs and its long shear runs each make up at least
 #: this share of its skeleton (runs of the smoothed per-pixel decision, >= MIN_RUN_PX long).
-MIXED_SHARE = 0.2
+MIXED_SHARE = config.MIXED_SHARE
 #: running-mean window (px) along a branch before runs are measured.
-RUN_SMOOTH_PX = 15
+RUN_SMOOTH_PX = config.RUN_SMOOTH_PX
 #: shortest run (px) of one type that counts as a segment of a mixed crack.
-MIN_RUN_PX = 25
+MIN_RUN_PX = config.MIN_RUN_PX
 #: skeleton branches shorter than this (px) are spurs/steps: typed by their neighbours.
-SHORT_BRANCH_PX = 12
+SHORT_BRANCH_PX = config.SHORT_BRANCH_PX
 #: branches meeting at a junction within this angle of a straight continuation are one trace.
-CONTINUE_DEG = 35.0
+CONTINUE_DEG = config.CONTINUE_DEG
 #: branch ends closer than this (px) meet at one junction.
-JUNCTION_PX = 4.0
+JUNCTION_PX = config.JUNCTION_PX
 #: branch ends of different objects up to this far apart (px), facing each other within
 #: CONTINUE_DEG, continue one trace across the gap (a crack broken by the threshold).
-GAP_PX = 8.0
+GAP_PX = config.GAP_PX
 #: feature names, in model order.
 FEATURE_NAMES = ("log_aperture", "aperture_cv", "dark_density", "skeleton_density",
                  "endpoint_density", "excess_dark", "skeleton_scatter", "dark_fill")

@@ -17,6 +17,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
+from . import config
 from .errors import InputError
 from .indices import damage_ratio
 
@@ -24,15 +25,15 @@ __all__ = ["p_status", "image_damage", "typed_areas", "darkness_fraction", "flag
            "STAGE_ORDER", "OUTLIER_Z", "OUTLIER_MIN_N"]
 
 #: Order of the loading stages on the P-by-stage plot and in ``damage.csv``.
-STAGE_ORDER = ("pre-test", "initiating", "propagation", "failure")
+STAGE_ORDER = config.STAGE_ORDER
 #: Modified z-score above which an image's P is flagged as an outlier.
-OUTLIER_Z = 3.5
+OUTLIER_Z = config.OUTLIER_Z
 #: Fewest finite P values in a test for the outlier rule to apply.
-OUTLIER_MIN_N = 5
+OUTLIER_MIN_N = config.OUTLIER_MIN_N
 #: band (px) around the crack objects over which partial-volume darkness is summed.
-PV_BAND_PX = 2
+PV_BAND_PX = config.PV_BAND_PX
 #: Gaussian sigma (px) of the local-background estimate for the partial-volume area.
-PV_BACKGROUND_SIGMA_PX = 4.0
+PV_BACKGROUND_SIGMA_PX = config.PV_BACKGROUND_SIGMA_PX
 #: ``mixed`` crack handling in A_T / A_S.
 MIXED_MODES = ("exclude", "split", "tensile", "shear")
 

@@ -20,6 +20,7 @@ import numpy as np
 import pandas as pd
 from scipy import ndimage as ndi
 
+from . import config
 from .errors import InputError
 
 __all__ = ["mineral_phases", "phase_separability", "segment_grains", "grain_table", "grain_size_table",
@@ -27,22 +28,22 @@ __all__ = ["mineral_phases", "phase_separability", "segment_grains", "grain_tabl
            "AUTO_CLASS_PERCENTILES"]
 
 #: automatic class edges: these count percentiles of the equivalent diameters of each mineral.
-AUTO_CLASS_PERCENTILES = (10.0, 90.0)
+AUTO_CLASS_PERCENTILES = config.AUTO_CLASS_PERCENTILES
 #: Gaussian denoising (px) before boundary detection.
-GRAIN_DENOISE_SIGMA_PX = 1.0
+GRAIN_DENOISE_SIGMA_PX = config.GRAIN_DENOISE_SIGMA_PX
 #: median filter (px, odd) before phase classification: removes 1-2 px boundary lines.
-PHASE_MEDIAN_PX = 5
+PHASE_MEDIAN_PX = config.PHASE_MEDIAN_PX
 #: Gaussian denoising (px) after the median, before phase classification.
-PHASE_SIGMA_PX = 0.0
+PHASE_SIGMA_PX = config.PHASE_SIGMA_PX
 #: scale (px) of the dark-ridge filter that finds faint boundaries inside one phase.
-RIDGE_SIGMA_PX = 1.0
+RIDGE_SIGMA_PX = config.RIDGE_SIGMA_PX
 #: h of the h-maxima transform of the distance map that seeds the watershed, in px.
-MARKER_H_PX = 2.0
+MARKER_H_PX = config.MARKER_H_PX
 #: a pixel whose boundary strength (gradient or ridge response over its image median, i.e. in
 #: units of the noise level) exceeds this is "boundary" when seeding the watershed.
-BOUNDARY_LEVEL = 6.0
+BOUNDARY_LEVEL = config.BOUNDARY_LEVEL
 #: EM iterations of the 1-D Gaussian mixture.
-GMM_ITERATIONS = 100
+GMM_ITERATIONS = config.GMM_ITERATIONS
 
 
 def _as_grey(image):

@@ -5,6 +5,7 @@ import pytest
 from scipy import ndimage as ndi
 from scipy.spatial import cKDTree
 
+from semkit import config
 from semkit.errors import InputError
 from semkit.grains import (
     grain_size_table,
@@ -15,10 +16,10 @@ from semkit.grains import (
 )
 from semkit.indices import indices_from_table
 
-# issue #3 targets
-FRACTION_TOL_ABS = 0.02
-MEDIAN_D_TOL = 0.05
-COUNT_TOL = 0.10
+# issue #3 targets (semkit.config)
+FRACTION_TOL_ABS = config.GRAIN_FRACTION_TOL_ABS
+MEDIAN_D_TOL = config.GRAIN_MEDIAN_D_TOL
+COUNT_TOL = config.GRAIN_COUNT_TOL
 NAMES = ["pyroxene", "plagioclase", "biotite"]
 
 
