@@ -32,6 +32,16 @@ _LAZY = {
     "CrackAnalysis": "pipeline", "overlay_cracks": "plot", "plot_histograms": "plot",
     "make_sem_image": "synth", "SynthImage": "synth", "write_sample_set": "synth",
     # --- issue #3 names (grains, classify, indices, damage) go here ---
+    "mineral_phases": "grains", "segment_grains": "grains", "grain_table": "grains",
+    "grain_size_table": "grains", "slenderness": "grains", "grains_stage": "grains",
+    "plot_grain_histograms": "grains", "plot_grain_map": "grains",
+    "classify_pre": "classify", "classify_post": "classify", "post_features": "classify",
+    "train_post": "classify", "save_model": "classify", "load_model": "classify",
+    "apply_labels": "classify", "read_labels": "classify",
+    "damage_ratio": "indices", "heterogeneity_index": "indices", "mhi": "indices",
+    "indices_from_table": "indices", "split_range": "indices", "table_with_ranges": "indices",
+    "image_damage": "damage", "damage_table": "damage", "flag_outliers": "damage",
+    "typed_areas": "damage", "plot_p_by_stage": "damage",
     # --- end issue #3 ---
 }
 
