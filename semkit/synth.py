@@ -7,8 +7,9 @@ smooth illumination gradient and detector noise. Everything random comes from on
 
 Ground truth (see :class:`SynthImage`): the crack mask is the set of pixels whose centre lies
 within half the local width of a crack centreline (partial-volume coverage >= 0.5); the length
-of a crack is the total length of the centreline polylines drawn for it (main trace, branches,
-en-echelon pieces; debris excluded).
+of a crack is the length of its path (main centreline plus branches). A shear crack is drawn as
+en-echelon steps or two thin layers along that path; the total length of everything drawn is
+``trace_length_px`` (equal to ``length_px`` for pre-test and tensile cracks).
 
 Run ``python -m semkit.synth OUT_DIR`` to (re)write the bundled ``sample_images/`` set.
 """
@@ -59,7 +60,9 @@ class SynthImage:
         One row per crack: ``crack_id, type_pre`` (inter|intra|trans), ``type_post``
         (tensile|shear|mixed, or unknown for ``stage="pre"``), ``area_px`` (pixel count of the
         mask), ``area_cov_px`` (partial-volume area: sum of the anti-aliased coverage; for
-        1-px cracks the physically meaningful area), ``length_px, width_px`` (nominal width), ``n_traces, n_branches, debris_px, n_grains, orientation_deg``.
+        1-px cracks the physically meaningful area), ``length_px`` (path length: main centreline +
+        branches), ``trace_length_px`` (all drawn traces: layers and overlapping en-echelon
+        steps count each), ``width_px`` (nominal width), ``n_traces, n_branches, debris_px, n_grains, orientation_deg``.
     grains : DataFrame
         One row per grain: ``grain_id, mineral`` (name), ``mineral_idx, area_px, eq_diameter_px``.
     mineral_names : tuple of str
@@ -468,17 +471,19 @@ def make_sem_image(shape=(768, 1024), *, stage="pre", n_cracks=None, widths=(1.0
             exd, _ = _render_traces(debris, (h, w))
             debris_px = int((exd <= 0).sum())
         area_cov = float(np.clip(0.5 - ex, 0.0, 1.0).sum())
-        length = sum(_polylen(t) for t in traces)
+        length = sum(_polylen(m) for m in mains)       # the crack's path (main + branches)
+        trace_length = sum(_polylen(t) for t in traces)  # every drawn trace (layers, steps)
         chord = mains[0][-1, :2] - mains[0][0, :2]
         all_pts = np.vstack([_resample(m, 1.0) for m in mains])
         rows.append(dict(crack_id=cid, type_pre=type_pre, type_post=type_post,
-                         area_px=int(free.sum()), area_cov_px=area_cov, length_px=length, width_px=width,
+                         area_px=int(free.sum()), area_cov_px=area_cov, length_px=length,
+                         trace_length_px=trace_length, width_px=width,
                          n_traces=len(traces), n_branches=n_branches, debris_px=debris_px,
                          n_grains=len(_grains_on(all_pts, grain_labels)),
                          orientation_deg=float(np.degrees(np.arctan2(-chord[1], chord[0])) % 180.0)))
         all_traces.append(traces + debris)
     cracks = pd.DataFrame(rows, columns=["crack_id", "type_pre", "type_post", "area_px",
-                                         "area_cov_px", "length_px",
+                                         "area_cov_px", "length_px", "trace_length_px",
                                          "width_px", "n_traces", "n_branches", "debris_px",
                                          "n_grains", "orientation_deg"])
 

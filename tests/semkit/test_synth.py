@@ -64,10 +64,13 @@ def test_post_stage_morphologies():
     for k in sh["crack_id"]:
         widths = np.concatenate([tr[:, 2] for tr in s.traces[k - 1] if len(tr) > 1])
         assert widths.max() <= 2.5
-    # length = the drawn centrelines (debris excluded)
+    # tensile: the path is the drawn trace; shear: layers / overlapping steps draw more
     from semkit.synth import _polylen
     k = int(t["crack_id"].iloc[0])
-    assert np.isclose(t["length_px"].iloc[0], sum(_polylen(tr) for tr in s.traces[k - 1]))
+    drawn = sum(_polylen(tr) for tr in s.traces[k - 1])
+    assert np.isclose(t["trace_length_px"].iloc[0], drawn)
+    assert np.isclose(t["length_px"].iloc[0], drawn, rtol=0.01)
+    assert (sh["trace_length_px"] > 1.05 * sh["length_px"]).all()
 
 
 def test_grey_levels_speckles_and_gradient():
