@@ -82,6 +82,8 @@ def main(argv=None):
     p.add_argument("--seed", type=int, default=1)
     p.add_argument("--velocities", default="0.4,0.2,0.1,0.05,0.025",
                    help="platen speeds, m/s, fastest first (the last is the reference)")
+    p.add_argument("--ladder-factor", type=float, default=None,
+                   help="time-step factor of the speed ladder (default: engine default)")
     p.add_argument("--factors", default="0.8,0.5,0.3",
                    help="time-step factors, largest first (the last is the reference)")
     p.add_argument("--factor-velocity", type=float, default=None,
@@ -103,17 +105,17 @@ def main(argv=None):
     vel = [float(v) for v in a.velocities.split(",")]
     rows_v = []
     for v in vel:
-        rows_v.append(_run(spec, v, None, a.post_peak))
+        rows_v.append(_run(spec, v, a.ladder_factor, a.post_peak))
         print(json.dumps(rows_v[-1]), flush=True)
     _errors(rows_v)
     best_v = _choose(rows_v, a.tol)
     fv = a.factor_velocity or (best_v["platen_velocity_m_per_s"] if best_v else vel[-1])
     rows_f = []
-    for f in [float(x) for x in a.factors.split(",")]:
+    for f in [float(x) for x in a.factors.split(",") if x]:
         rows_f.append(_run(spec, fv, f, a.post_peak))
         print(json.dumps(rows_f[-1]), flush=True)
-    _errors(rows_f)
-    best_f = _choose(rows_f, a.tol)
+    _errors(rows_f) if rows_f else None
+    best_f = _choose(rows_f, a.tol) if rows_f else None
     os.makedirs(a.out, exist_ok=True)
     res = {"specimen": source, "n_particles": spec.n_particles, "tol": a.tol,
            "machine": {"cpus": os.cpu_count(), "python": platform.python_version(),
@@ -123,8 +125,11 @@ def main(argv=None):
     with open(os.path.join(a.out, "ucs_convergence.json"), "w") as f:
         json.dump(res, f, indent=2)
     md = [f"# UCS convergence ({source}, {spec.n_particles} particles)", "",
-          _table(rows_v, "Platen speed (time-step factor: engine default)"),
+          _table(rows_v, "Platen speed (time-step factor: "
+                 f"{a.ladder_factor or 'engine default'})"),
           _table(rows_f, f"Time-step factor (platen speed {fv} m/s)")]
+    if not rows_f:
+        md.pop()
     if best_v:
         md.append(f"Cheapest speed within {100 * a.tol:.0f} % of the slowest run: "
                   f"{best_v['platen_velocity_m_per_s']} m/s.")

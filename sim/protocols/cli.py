@@ -17,7 +17,7 @@ _TESTS = ("ucs", "tension", "brazilian", "biaxial")
 
 
 def _common(p, *, rate=True):
-    from .loading import DEFAULT_PLATEN_VELOCITY, DEFAULT_POST_PEAK
+    from .loading import DEFAULT_PLATEN_VELOCITY, DEFAULT_POST_PEAK, DEFAULT_TIMESTEP_FACTOR
     p.add_argument("specimen", help="specimen.npz (DESIGN.md §4)")
     p.add_argument("--out", required=True, help="results directory")
     p.add_argument("--params", metavar="FILE.yaml",
@@ -34,8 +34,9 @@ def _common(p, *, rate=True):
     p.add_argument("--max-strain", type=float, default=None,
                    help="stop at this strain instead (elastic checks); disables --post-peak")
     p.add_argument("--damping", type=float, default=0.7, help="local damping alpha (0.7)")
-    p.add_argument("--timestep-factor", type=float, default=None,
-                   help="safety factor on the critical time step (engine default)")
+    p.add_argument("--timestep-factor", type=float, default=DEFAULT_TIMESTEP_FACTOR,
+                   help="safety factor on the critical time step "
+                        f"(default {DEFAULT_TIMESTEP_FACTOR}, from the convergence study)")
     p.add_argument("--checkpoint-every", type=int, default=0,
                    help="also write checkpoint.npz every N records (always on Ctrl-C)")
     p.add_argument("--no-figures", action="store_true", help="skip the PNG figures")

@@ -55,7 +55,7 @@ def compression_summary(history, *, stress_col="axial_stress_mpa", e_method="tan
 def run_ucs(specimen, *, strain_rate: float | None = None,
             platen_velocity: float = ld.DEFAULT_PLATEN_VELOCITY,
             post_peak: float | None = ld.DEFAULT_POST_PEAK, max_strain: float | None = None,
-            damping: float = 0.7, timestep_factor: float | None = None,
+            damping: float = 0.7, timestep_factor: float | None = ld.DEFAULT_TIMESTEP_FACTOR,
             record_strain: float = ld.RECORD_STRAIN, ramp_records: int = 5,
             e_method: str = "tangent", limit_strain: float = 0.05, out=None,
             progress: bool = True, figures: bool = True, checkpoint_every: int = 0,
@@ -76,7 +76,8 @@ def run_ucs(specimen, *, strain_rate: float | None = None,
     max_strain : float or None
         Stop at this axial strain (elastic checks where nothing breaks).
     damping, timestep_factor : float
-        Engine options (local damping α; safety factor on the critical step).
+        Engine options: local damping α; safety factor on the critical step (default
+        :data:`sim.protocols.loading.DEFAULT_TIMESTEP_FACTOR` = 0.8; None: the engine's).
     record_strain : float
         Axial strain between history records.
     e_method : {"tangent", "secant"}
