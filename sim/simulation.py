@@ -33,6 +33,12 @@ from .walls import carry_history, wall_candidates
 FORMAT = "gbmsim-checkpoint-1"
 
 
+def _set_wait_policy():
+    """OMP_WAIT_POLICY (config) unless set by the user; libgomp reads it when its thread pool
+    starts, i.e. at the first parallel kernel call, so this runs before any kernel."""
+    os.environ.setdefault("OMP_WAIT_POLICY", config.OMP_WAIT_POLICY)
+
+
 class Simulation:
     """A 2D bonded-particle DEM run (PFC2D style) on a :class:`~sim.Specimen`.
 
@@ -89,6 +95,7 @@ class Simulation:
                  pb_mcf: float = 1.0, sj_dilation_deg: float = 0.0):
         if not isinstance(specimen, Specimen):
             raise TypeError("specimen: expected a sim.Specimen")
+        _set_wait_policy()
         specimen.validate()
         if not 0.0 <= damping < 1.0:
             raise InputError(f"damping = {damping}: expected 0 <= alpha < 1")
@@ -694,6 +701,7 @@ class Simulation:
     @classmethod
     def load(cls, path) -> "Simulation":
         """Read a checkpoint written by :meth:`save`."""
+        _set_wait_policy()
         path = os.fspath(path)
         try:
             with np.load(path, allow_pickle=False) as z:
