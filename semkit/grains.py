@@ -159,6 +159,9 @@ def _median(g, size):
         return g
     if size % 2 == 0:
         raise InputError(f"median_px: expected an odd size, got {size}")
+    if size <= 5:  # OpenCV: float32 medians up to 5 x 5, ~100x faster than ndimage
+        import cv2
+        return cv2.medianBlur(np.ascontiguousarray(g, np.float32), size).astype(np.float64)
     return ndi.median_filter(g, size=size, mode="reflect")
 
 
