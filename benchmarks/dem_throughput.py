@@ -27,7 +27,7 @@ import time
 
 import numpy as np
 
-import sim  # noqa: F401  (sets the OpenMP wait policy before numba starts its thread pool)
+import sim as _sim  # noqa: F401  (sets the OpenMP wait policy before the thread pool starts)
 
 
 def _split(sim, reps=20):
@@ -133,8 +133,10 @@ def main(argv=None):
         for t in a.threads:
             r = run_case(n, t, a.budget, a.repeat, a.seed, a.prerun)
             rows.append(r)
-            print(f"N={n:>7d} threads={t}: {r['particle_steps_per_s'] / 1e6:6.2f} M particle-steps/s"
-                  f"  {r['ns_per_particle_step']:6.1f} ns/particle-step  (load {r['load_avg_1min']:.1f})",
+            print(f"N={n:>7d} threads={t}: "
+                  f"{r['particle_steps_per_s'] / 1e6:6.2f} M particle-steps/s  "
+                  f"{r['ns_per_particle_step']:6.1f} ns/particle-step  "
+                  f"(load {r['load_avg_1min']:.1f})",
                   flush=True)
     checks = [] if a.no_verify else verification_cases()
     result = {
@@ -149,14 +151,16 @@ def main(argv=None):
     os.makedirs(a.out, exist_ok=True)
     with open(os.path.join(a.out, "dem_throughput.json"), "w") as f:
         json.dump(result, f, indent=2)
-    lines = ["| N | threads | M particle-steps/s | M pair-steps/s | ns/particle-step | bonds/particle "
-             "| rebuilds | broad phase | pairs | particles | engine MB | load avg |",
+    lines = ["| N | threads | M particle-steps/s | M pair-steps/s | ns/particle-step "
+             "| bonds/particle | rebuilds | broad phase | pairs | particles | engine MB "
+             "| load avg |",
              "|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
         lines.append(
             f"| {r['particles']} | {r['threads']} | {r['particle_steps_per_s'] / 1e6:.2f} | "
             f"{r['pair_steps_per_s'] / 1e6:.2f} | {r['ns_per_particle_step']:.1f} | "
-            f"{r['bonds_per_particle']:.2f} | {r['rebuilds']} | {100 * r['split_broad_phase']:.0f} % | "
+            f"{r['bonds_per_particle']:.2f} | {r['rebuilds']} | "
+            f"{100 * r['split_broad_phase']:.0f} % | "
             f"{100 * r['split_pairs']:.0f} % | {100 * r['split_particles']:.0f} % | "
             f"{r['engine_mb']:.1f} | {r['load_avg_1min']:.1f} |")
     if checks:

@@ -1,6 +1,7 @@
 """Damping laws: local (non-viscous) damping per degree of freedom (REFERENCE.md §5).
 
-Viscous contact dashpots live with the linear law (:func:`sim.contacts.linear.dashpot_coefficients`).
+Viscous contact dashpots live with the linear law
+(:func:`sim.contacts.linear.dashpot_coefficients`).
 """
 from ._jit import njit
 

@@ -1,11 +1,12 @@
 """Central-difference integration, the compiled step loop and the critical time step.
 
 One ``njit(parallel=True)`` function, :func:`run_steps`, runs many steps without returning to
-Python (STYLE.md §7): per step one particle pass that gathers the pair forces, applies local
-damping and integrates, then a bond pass, a joint pass, a contact pass (each writing per-pair
-forces, race-free) and a serial wall pass. Passes a scene does not have (joints, walls, dashpots) are
-skipped once per step; no per-contact branch tests for them. It returns early when the Verlet
-list needs a rebuild or the run became unstable.
+Python (STYLE.md §7). Per step: a particle pass (sum the per-thread force buffers, local damping,
+integration), wall motion, one pass over all pairs (parallel-bonded pairs, smooth joints, Verlet
+contacts; each chunk scatters into its own force buffer, race-free) and a short serial wall
+pass. Passes a scene does not have (joints, walls, dashpots) are skipped once per step; no
+per-contact branch tests for them. It returns early when the Verlet list needs a rebuild or the
+run became unstable.
 """
 import numpy as np
 
@@ -13,10 +14,64 @@ from . import config
 from ._jit import njit, prange
 from .damping import local_damping
 from .forces import contact_range, contact_range_dashpot, pb_range, sj_range
-from .state import (ARI, LCN, LCS, LFN, LFS, LKN, LKS, LMU, BRK_NX, BRK_NY, BRK_STEP, BRK_X, BRK_Y, C_CN, C_CS, C_FN,
-                    C_FS, C_KN, C_KS, C_MU, COHA, FM, FN, FRIC, FS, FVX, FVY, FW, FX,
-                    FY, INVI, INVM, KNA, KNI, KSA, MB, NJX, NJY, Q_FN, Q_FS, Q_KN, Q_KS, Q_MU, R,
-                    TANDIL, TANFA, TENA, UN, VX, VY, W, W_DISP, X, X0, Y, Y0)
+from .state import (
+    ARI,
+    BRK_NX,
+    BRK_NY,
+    BRK_STEP,
+    BRK_X,
+    BRK_Y,
+    C_CN,
+    C_CS,
+    C_FN,
+    C_FS,
+    C_KN,
+    C_KS,
+    C_MU,
+    COHA,
+    FM,
+    FN,
+    FRIC,
+    FS,
+    FVX,
+    FVY,
+    FW,
+    FX,
+    FY,
+    INVI,
+    INVM,
+    KNA,
+    KNI,
+    KSA,
+    LCN,
+    LCS,
+    LFN,
+    LFS,
+    LKN,
+    LKS,
+    LMU,
+    MB,
+    NJX,
+    NJY,
+    Q_FN,
+    Q_FS,
+    Q_KN,
+    Q_KS,
+    Q_MU,
+    TANDIL,
+    TANFA,
+    TENA,
+    UN,
+    VX,
+    VY,
+    W_DISP,
+    X0,
+    Y0,
+    R,
+    W,
+    X,
+    Y,
+)
 from .walls import wall_forces, wall_motion
 
 

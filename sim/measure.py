@@ -6,8 +6,41 @@ import math
 
 import numpy as np
 
-from .state import (C_FN, C_FS, C_KN, C_KS, FM, FN, FS, FX, FY, INERTIA, INVI, INVM, KNA,
-                    KNI, KSA, LFN, LFS, LKN, LKS, MASS, MB, NJX, NJY, Q_FN, Q_FS, Q_KN, Q_KS, UN, VX, VY, W, X, Y)
+from .state import (
+    C_FN,
+    C_FS,
+    C_KN,
+    C_KS,
+    FM,
+    FN,
+    FS,
+    FX,
+    FY,
+    INERTIA,
+    INVI,
+    INVM,
+    KNA,
+    KNI,
+    KSA,
+    LFN,
+    LFS,
+    LKN,
+    LKS,
+    MASS,
+    MB,
+    NJX,
+    NJY,
+    Q_FN,
+    Q_FS,
+    Q_KN,
+    Q_KS,
+    UN,
+    VX,
+    VY,
+    W,
+    X,
+    Y,
+)
 
 
 def energies(state, dt, alpha=0.0):
@@ -49,7 +82,8 @@ def energies(state, dt, alpha=0.0):
     e_c += np.sum(0.5 * bf[LFN, lin] ** 2 / bf[LKN, lin] + 0.5 * bf[LFS, lin] ** 2 / bf[LKS, lin])
     nq = state.nq
     qf = state.qf
-    e_w = np.sum(0.5 * qf[Q_FN, :nq] ** 2 / qf[Q_KN, :nq] + 0.5 * qf[Q_FS, :nq] ** 2 / qf[Q_KS, :nq])
+    e_w = np.sum(0.5 * qf[Q_FN, :nq] ** 2 / qf[Q_KN, :nq]
+                 + 0.5 * qf[Q_FS, :nq] ** 2 / qf[Q_KS, :nq])
     return {"kinetic": kin, "strain_bond": float(e_pb + e_sj), "strain_contact": float(e_c),
             "strain_wall": float(e_w)}
 

@@ -10,8 +10,23 @@ import numpy as np
 
 from ._jit import njit
 from .contacts.linear import linear_force
-from .state import (W_DISP, W_FX, W_FY, W_GAIN, W_KTOT, W_LENGTH, W_NX, W_NY, W_PX,
-                    W_PY, W_SERVO, W_TARGET, W_VMAX, W_VX, W_VY)
+from .state import (
+    W_DISP,
+    W_FX,
+    W_FY,
+    W_GAIN,
+    W_KTOT,
+    W_LENGTH,
+    W_NX,
+    W_NY,
+    W_PX,
+    W_PY,
+    W_SERVO,
+    W_TARGET,
+    W_VMAX,
+    W_VX,
+    W_VY,
+)
 
 
 @njit
@@ -104,7 +119,7 @@ def wall_motion(dt, t, servo_alpha, wf):
 
 
 def wall_candidates(x, y, r, wf, skin):
-    """Particles within ``skin`` of each wall: (qp, qw) int32 arrays, sorted by wall then particle."""
+    """Particles within ``skin`` of each wall: (qp, qw) int32, sorted by wall then particle."""
     qp, qw = [], []
     for k in range(wf.shape[0]):
         dist = (x - wf[k, W_PX]) * wf[k, W_NX] + (y - wf[k, W_PY]) * wf[k, W_NY]

@@ -1,4 +1,4 @@
-"""Local damping: 1-DOF oscillation decays by (1 - alpha)/(1 + alpha) per cycle (REFERENCE.md §5)."""
+"""Local damping: a 1-DOF oscillation decays by (1 - alpha)/(1 + alpha) per cycle (REFERENCE §5)."""
 import numpy as np
 import pytest
 from _sim_fixtures import disks

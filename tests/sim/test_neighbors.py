@@ -50,6 +50,7 @@ def test_shear_history_survives_rebuilds():
     """A contact sheared while the list is rebuilt every few steps keeps its shear force:
     same history as without rebuilds, k_s u before sliding, then mu Fn."""
     from _sim_fixtures import disks
+
     from sim.state import C_FN, C_FS
 
     R = 1e-3
