@@ -17,7 +17,8 @@ import os
 import time
 
 from ..calibrate import DEFAULT_TARGETS, calibrate
-from ..errors import InputError
+from ..errors import InputError, InstabilityError
+from .loading import DEFAULT_TIMESTEP_FACTOR
 from .outputs import json_ready, write_json_atomic, write_text_atomic
 from .parameters import apply_parameters, load_parameters, save_parameters, start_parameters
 
@@ -37,11 +38,19 @@ def make_evaluator(specimen, *, platen_velocity=None, tension_test="direct", pro
         raise ValueError(f"'tension_test' = {tension_test!r}, expected 'direct' or 'brazilian'")
     kw = {} if platen_velocity is None else {"platen_velocity": platen_velocity}
 
+    def robust(fn, spec):
+        # an InstabilityError after the peak must not end a long calibration: rerun once at
+        # 0.6 x the time-step factor (the rerun is recorded in the summary options)
+        try:
+            return fn(spec, progress=progress, **kw).summary
+        except InstabilityError:
+            f = 0.6 * (kw.get("timestep_factor") or DEFAULT_TIMESTEP_FACTOR)
+            return fn(spec, progress=progress, **{**kw, "timestep_factor": f}).summary
+
     def evaluate(params):
         spec = apply_parameters(specimen, params)
-        u = run_ucs(spec, progress=progress, **kw).summary
-        fn = run_tension if tension_test == "direct" else run_brazilian
-        t = fn(spec, progress=progress, **kw).summary
+        u = robust(run_ucs, spec)
+        t = robust(run_tension if tension_test == "direct" else run_brazilian, spec)
         return {"E": u["E_gpa"] * 1e9, "UCS": u["ucs_mpa"] * 1e6,
                 "sigma_t": t["tensile_mpa"] * 1e6, "nu": u["nu"],
                 "wall_s": u["wall_s"] + t["wall_s"]}

@@ -1,0 +1,50 @@
+"""Loading helpers: exact checks without the engine."""
+import doctest
+
+import numpy as np
+import pytest
+
+from sim import Specimen
+from sim.protocols import loading as ld
+
+
+def test_docstring_examples():
+    r = doctest.testmod(ld)
+    assert r.attempted >= 6 and r.failed == 0
+
+
+def test_gauge_strains_recover_an_affine_field_exactly():
+    rng = np.random.default_rng(3)
+    x0, y0 = rng.uniform(0, 1, 50), rng.uniform(0, 2, 50)
+    F = np.array([[1 + 3e-4, 1e-4], [2e-4, 1 - 1e-3]])         # small strain + rotation part
+    x = F[0, 0] * x0 + F[0, 1] * y0 + 0.01
+    y = F[1, 0] * x0 + F[1, 1] * y0 - 0.02
+    exx, eyy = ld.gauge_strains(x0, y0, x, y, np.arange(50))
+    assert exx == pytest.approx(-3e-4, abs=1e-15) and eyy == pytest.approx(1e-3, abs=1e-15)
+
+
+def test_relieve_overlaps_leaves_no_overlap_and_changes_little():
+    s = Specimen.lattice(nx=6, ny=5, radius=1e-3, gap=-4e-3)        # 0.8 % overlaps
+    t, info = ld.relieve_overlaps(s)
+    d = np.hypot(t.x[t.bond_j] - t.x[t.bond_i], t.y[t.bond_j] - t.y[t.bond_i])
+    assert np.all(t.r[t.bond_i] + t.r[t.bond_j] <= d)
+    assert info["max_overlap_rel"] == pytest.approx(0.008, rel=1e-6)
+    assert info["max_radius_change_rel"] == pytest.approx(0.004, rel=1e-6)
+    assert t.box[0] == pytest.approx((t.x - t.r).min()) and s.r[0] == 1e-3   # input unchanged
+    u, info2 = ld.relieve_overlaps(Specimen.lattice(nx=3, ny=3, radius=1e-3, gap=1e-3))
+    assert info2["n_overlaps"] == 0 and info2["max_radius_change_rel"] == 0.0
+
+
+def test_loading_rate_and_stop_rule():
+    assert ld.loading_rate(None, 0.0125, 0.05) == (0.5, 0.0125)
+    with pytest.raises(ValueError, match="strain_rate"):
+        ld.loading_rate(-1.0, 0.01, 0.05)
+    rule = ld.StopRule(post_peak=0.8)
+    e = [0, 1, 2, 3, 4]
+    s = [0, 50e6, 100e6, 90e6, 70e6]
+    assert rule.reason(e, s, n_cracks=0) is None           # no crack: wave noise, not failure
+    assert rule.reason(e, s, n_cracks=5) == "post_peak"
+    assert rule.reason(e, [0, 0.5e6, 0.1e6, 0, 0], n_cracks=5) is None   # peak below 1 MPa
+    assert ld.StopRule(post_peak=None, max_strain=4).reason(e, s) == "max_strain"
+    with pytest.raises(ValueError, match="never stop"):
+        ld.StopRule(post_peak=None, max_strain=None)
