@@ -18,7 +18,7 @@ TIMESTEP_FACTOR = 0.5
 #: Verlet skin as a fraction of the mean particle radius. Pairs closer than r_i + r_j + skin are
 #: kept in the contact list; the list is rebuilt when the largest displacement since the last
 #: build exceeds skin / 2.
-SKIN_FACTOR = 0.3
+SKIN_FACTOR = 0.5
 
 #: Scenes with fewer particles run the step loop on one thread (a parallel region costs a few
 #: microseconds to start, more when other processes load the cores).

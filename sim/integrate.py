@@ -412,19 +412,31 @@ def critical_timestep(state, t=config.THICKNESS):
     intact = state.bstate == 0
     sj = state.bkind == 1
     live = intact | sj  # an unbonded smooth joint still has frictional stiffness
-    pb = state.bkind == 0
-    for ends in (state.bi, state.bj):
-        e = ends[live]
-        kna = state.bf[KNA][live]
-        ksa = state.bf[KSA][live]
-        kni = state.bf[KNI][live] * intact[live]
-        ktr += np.bincount(e, np.maximum(kna, ksa), minlength=n)
-        krot += np.bincount(e, ksa * r[e] ** 2 + kni, minlength=n)
-        # linear contact part of parallel-bonded pairs (whether or not they touch now)
-        e = ends[pb]
-        lkn, lks = state.bf[LKN][pb], state.bf[LKS][pb]
-        ktr += np.bincount(e, np.maximum(lkn, lks), minlength=n)
-        krot += np.bincount(e, lks * r[e] ** 2, minlength=n)
+    # the bond part changes only when bonds break: cached on the state, keyed by the states
+    key = (int(np.count_nonzero(intact)), state.n_bonds, n)
+    cache = getattr(state, "_kbond_cache", None)
+    if cache is not None and cache[0] == key:
+        ktr += cache[1]
+        krot += cache[2]
+    else:
+        kt_b = np.zeros(n)
+        kr_b = np.zeros(n)
+        pb = state.bkind == 0
+        for ends in (state.bi, state.bj):
+            e = ends[live]
+            kna = state.bf[KNA][live]
+            ksa = state.bf[KSA][live]
+            kni = state.bf[KNI][live] * intact[live]
+            kt_b += np.bincount(e, np.maximum(kna, ksa), minlength=n)
+            kr_b += np.bincount(e, ksa * r[e] ** 2 + kni, minlength=n)
+            # linear contact part of parallel-bonded pairs (whether or not they touch now)
+            e = ends[pb]
+            lkn, lks = state.bf[LKN][pb], state.bf[LKS][pb]
+            kt_b += np.bincount(e, np.maximum(lkn, lks), minlength=n)
+            kr_b += np.bincount(e, lks * r[e] ** 2, minlength=n)
+        state._kbond_cache = (key, kt_b, kr_b)
+        ktr += kt_b
+        krot += kr_b
     nc = state.nc
     if nc:
         kn = state.cf[C_KN, :nc]
