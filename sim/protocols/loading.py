@@ -16,6 +16,7 @@ import numpy as np
 import pandas as pd
 
 from ..analysis import CRACK_KINDS, is_post_peak
+from ..errors import InstabilityError
 from .outputs import CRACK_COLUMNS, HISTORY_COLUMNS
 
 __all__ = ["DEFAULT_PLATEN_VELOCITY", "DEFAULT_TIMESTEP_FACTOR", "loading_rate",
@@ -352,6 +353,7 @@ class LoadingLoop:
     desc: str = "loading"
     rows: list = field(default_factory=list)
     stop_reason: str = ""
+    engine_error: str = ""
     interrupted: bool = False
     wall_s: float = 0.0
     steps: int = 0
@@ -409,6 +411,16 @@ class LoadingLoop:
                     break
             else:
                 self.stop_reason = "max_steps"
+        except InstabilityError as exc:
+            # after the peak the test has given its answer (peak, E, CI, CD): an engine
+            # instability among the fragments ends it like the post-peak rule, and is reported
+            ip = int(np.argmax(stress))
+            if ip < len(stress) - 1 and stress[-1] < 0.98 * stress[ip] \
+                    and self.rows[-1].get("cracks_total", 1) > 0:
+                self.stop_reason = "instability_after_peak"
+                self.engine_error = str(exc)
+            else:
+                raise
         except KeyboardInterrupt:
             self.interrupted = True
             self.stop_reason = "interrupted"

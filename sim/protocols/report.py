@@ -34,6 +34,7 @@ def base_summary(test: str, specimen, loop, sim, options: dict) -> dict:
             "n_particles": n, "n_bonds": specimen.n_bonds,
             "status": "interrupted" if loop.interrupted else "complete",
             "stop_reason": loop.stop_reason, "steps": steps,
+            "engine_error": loop.engine_error or None,
             "dt_s": float(getattr(sim, "dt", float("nan"))),
             "wall_s": loop.wall_s,
             "particle_steps_per_s": n * steps / loop.wall_s if loop.wall_s > 0 else None,

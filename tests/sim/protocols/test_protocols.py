@@ -233,3 +233,38 @@ def test_cli_runs_ucs_and_reports_bad_input(tmp_path, capsys):
     args = parser.parse_args(["ucs", str(tmp_path / "missing.npz"), "--out", str(out)])
     assert args.func(args) == 2
     assert "missing.npz" in capsys.readouterr().err
+
+
+def test_engine_instability_after_the_peak_ends_the_test_with_its_answer(rock, monkeypatch):
+    """An InstabilityError among the fragments after the peak stops the test like the
+    post-peak rule (UCS already known) and is reported; before the peak it propagates."""
+    from sim.errors import InstabilityError
+    from sim.simulation import Simulation
+    ref = run_ucs(rock, strain_rate=RATE, post_peak=0.3, progress=False)
+    h = ref.history
+    ip = int(np.argmax(h["axial_stress_mpa"]))
+    s = h["axial_stress_mpa"].to_numpy()
+    k = ip + int(np.argmax(s[ip:] < 0.95 * s[ip]))    # first record 5 % below the peak
+    late = int(h["step"].iloc[k])
+    orig = Simulation.cycle
+
+    def cycle(self, n, **kw):
+        if self.step >= late:
+            raise InstabilityError("unstable (test)", step=self.step, cause="energy")
+        return orig(self, n, **kw)
+
+    monkeypatch.setattr(Simulation, "cycle", cycle)
+    res = run_ucs(rock, strain_rate=RATE, post_peak=0.3, progress=False)
+    sm = res.summary
+    assert sm["stop_reason"] == "instability_after_peak" and "unstable" in sm["engine_error"]
+    assert sm["ucs_mpa"] == pytest.approx(ref.summary["ucs_mpa"], rel=1e-12)
+    early = int(h["step"].iloc[ip // 2])
+
+    def cycle_early(self, n, **kw):
+        if self.step >= early:
+            raise InstabilityError("unstable (test)", step=self.step, cause="energy")
+        return orig(self, n, **kw)
+
+    monkeypatch.setattr(Simulation, "cycle", cycle_early)
+    with pytest.raises(InstabilityError):
+        run_ucs(rock, strain_rate=RATE, post_peak=0.3, progress=False)
