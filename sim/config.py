@@ -44,6 +44,14 @@ MAX_OVERLAP = 1.0
 SERVO_ALPHA = 0.5
 SERVO_VMAX = 1.0
 
+#: Sleeping particles (Simulation(sleep=True); off by default): a free particle that moved
+#: less than SLEEP_DISP x mean radius per step, with an unbalanced force below
+#: SLEEP_FORCE_RATIO x the sum of its pair-force magnitudes, for SLEEP_STEPS steps in a row,
+#: sleeps; it wakes when a pair or wall contact around it moves more than that per step.
+SLEEP_DISP = 1e-9
+SLEEP_FORCE_RATIO = 1e-3
+SLEEP_STEPS = 200
+
 #: Equilibrium: default target of the mean unbalanced-force ratio and the check interval, steps.
 SOLVE_RATIO = 1e-5
 SOLVE_CHECK_INTERVAL = 50

@@ -26,8 +26,18 @@ from .contacts.smooth_joint import sj_update
 
 
 @njit
+def _sleep_slots(acc, i, j, si, sj, fx, fy, du, sleep_d):
+    """Fourth buffer slot: for an awake particle the sum of |pair force| (its sleep test), for a
+    sleeping one a wake vote when the pair moves more than ``sleep_d`` in this step."""
+    moving = 1.0 if du > sleep_d else 0.0
+    mag = abs(fx) + abs(fy)
+    acc[4 * i + 3] += moving if si > 0.0 else mag
+    acc[4 * j + 3] += moving if sj > 0.0 else mag
+
+
+@njit
 def pb_range(lo, hi, step, dt, kin, bi, bj, bstate, fn_, fs_, mb_, kna_, ksa_, kni_, ari_, tena_,
-             coha_, tanfa_, lfs_, lfn_, lkn_, lks_, lmu_, lcn_, lcs_, acc, brk_x, brk_y, brk_nx,
+             coha_, tanfa_, lfs_, lfn_, lkn_, lks_, lmu_, lcn_, lcs_, acc, sleep, sleep_d, brk_x, brk_y, brk_nx,
              brk_ny, brk_step):
     """Parallel-bonded pairs ``lo:hi``: the bond (while intact) plus the linear contact part of
     the pair (whenever the balls overlap, bonded or not, with its own shear history and
@@ -63,6 +73,8 @@ def pb_range(lo, hi, step, dt, kin, bi, bj, bstate, fn_, fs_, mb_, kna_, ksa_, k
         vyj = kin[oj + 3]
         wj = kin[oj + 4]
         rj = kin[oj + 5]
+        if sleep and kin[oi + 6] + kin[oj + 6] == 2.0:
+            continue  # both asleep: nothing moves, the stored pair state stays valid
         dx = xj - xi
         dy = yj - yi
         d = sqrt(dx * dx + dy * dy)
@@ -117,12 +129,15 @@ def pb_range(lo, hi, step, dt, kin, bi, bj, bstate, fn_, fs_, mb_, kna_, ksa_, k
         acc[o] += fx
         acc[o + 1] += fy
         acc[o + 2] += -aj * fs + mb
+        if sleep:
+            _sleep_slots(acc, i, j, kin[oi + 6], kin[oj + 6], fx, fy,
+                         (abs(vn) + abs(vt)) * dt, sleep_d)
     return nbreak, worst, bworst
 
 
 @njit
 def sj_range(lo, hi, step, dt, kin, bi, bj, bstate, fn_, fs_, un_, kna_, ksa_,
-             tena_, coha_, tanfa_, fric_, tandil_, njx_, njy_, acc, brk_x, brk_y, brk_nx, brk_ny,
+             tena_, coha_, tanfa_, fric_, tandil_, njx_, njy_, acc, sleep, sleep_d, brk_x, brk_y, brk_nx, brk_ny,
              brk_step):
     """Smooth joints ``lo:hi`` (forces along the fixed joint frame, no moment); returns breaks."""
     nbreak = 0
@@ -143,6 +158,8 @@ def sj_range(lo, hi, step, dt, kin, bi, bj, bstate, fn_, fs_, un_, kna_, ksa_,
         vyj = kin[oj + 3]
         wj = kin[oj + 4]
         rj = kin[oj + 5]
+        if sleep and kin[oi + 6] + kin[oj + 6] == 2.0:
+            continue  # both asleep: nothing moves, the stored pair state stays valid
         dx = xj - xi
         dy = yj - yi
         d = sqrt(dx * dx + dy * dy)
@@ -176,6 +193,9 @@ def sj_range(lo, hi, step, dt, kin, bi, bj, bstate, fn_, fs_, un_, kna_, ksa_,
         acc[o] += fx
         acc[o + 1] += fy
         acc[o + 2] -= aj * c
+        if sleep:
+            _sleep_slots(acc, i, j, kin[oi + 6], kin[oj + 6], fx, fy,
+                         (abs(vxc) + abs(vyc)) * dt, sleep_d)
         if broke != 0:
             bstate[b] = state
             brk_x[b] = xi + ai * nx
@@ -188,7 +208,7 @@ def sj_range(lo, hi, step, dt, kin, bi, bj, bstate, fn_, fs_, un_, kna_, ksa_,
 
 
 @njit
-def contact_range(lo, hi, dt, kin, ci, cj, fs_, kn_, ks_, mu_, cfn, acc):
+def contact_range(lo, hi, dt, kin, ci, cj, fs_, kn_, ks_, mu_, cfn, acc, sleep, sleep_d):
     """Linear contacts ``lo:hi`` without dashpots (``cfn`` = normal force, N).
 
     Returns
@@ -217,6 +237,8 @@ def contact_range(lo, hi, dt, kin, ci, cj, fs_, kn_, ks_, mu_, cfn, acc):
         vyj = kin[oj + 3]
         wj = kin[oj + 4]
         rj = kin[oj + 5]
+        if sleep and kin[oi + 6] + kin[oj + 6] == 2.0:
+            continue  # both asleep: nothing moves, the stored pair state stays valid
         dx = xj - xi
         dy = yj - yi
         rs = ri + rj
@@ -249,6 +271,9 @@ def contact_range(lo, hi, dt, kin, ci, cj, fs_, kn_, ks_, mu_, cfn, acc):
         acc[o] += fx
         acc[o + 1] += fy
         acc[o + 2] -= aj * fs
+        if sleep:
+            _sleep_slots(acc, i, j, kin[oi + 6], kin[oj + 6], fx, fy,
+                         (abs(dvx) + abs(dvy) + abs(vt)) * dt, sleep_d)
         rmin = ri if ri < rj else rj
         q = ov / rmin
         if q > worst:
@@ -259,7 +284,7 @@ def contact_range(lo, hi, dt, kin, ci, cj, fs_, kn_, ks_, mu_, cfn, acc):
 
 @njit
 def contact_range_dashpot(lo, hi, dt, kin, ci, cj, fs_, kn_, ks_, mu_, cn_, cs_,
-                          cfn, acc):
+                          cfn, acc, sleep, sleep_d):
     """Linear contacts ``lo:hi`` with viscous dashpots (dp_mode 0: full, may be tensile)."""
     worst = 0.0
     kworst = -1
@@ -280,6 +305,8 @@ def contact_range_dashpot(lo, hi, dt, kin, ci, cj, fs_, kn_, ks_, mu_, cn_, cs_,
         vyj = kin[oj + 3]
         wj = kin[oj + 4]
         rj = kin[oj + 5]
+        if sleep and kin[oi + 6] + kin[oj + 6] == 2.0:
+            continue  # both asleep: nothing moves, the stored pair state stays valid
         dx = xj - xi
         dy = yj - yi
         rs = ri + rj
@@ -315,6 +342,9 @@ def contact_range_dashpot(lo, hi, dt, kin, ci, cj, fs_, kn_, ks_, mu_, cn_, cs_,
         acc[o] += fx
         acc[o + 1] += fy
         acc[o + 2] -= aj * fst
+        if sleep:
+            _sleep_slots(acc, i, j, kin[oi + 6], kin[oj + 6], fx, fy,
+                         (abs(vn) + abs(vt)) * dt, sleep_d)
         rmin = ri if ri < rj else rj
         q = ov / rmin
         if q > worst:

@@ -77,12 +77,19 @@ from .walls import wall_forces, wall_motion
 
 @njit
 def particle_range(lo, hi, nrows, dt, alpha, step_lim, x, y, vx, vy, w, fx, fy, fm, r, invm,
-                   invi, x0, y0, fvx, fvy, fw, fix, acc, kin):
+                   invi, x0, y0, fvx, fvy, fw, fix, acc, kin, sleep, sleep_d, sleep_ratio,
+                   sleep_steps, quiet):
     """Sum the force buffers, damp and integrate particles ``lo:hi``.
 
-    Reads and zeroes ``acc[:nrows, 4p:4p+3]``; writes fx, fy, fm (the unbalanced contact
+    Reads and zeroes ``acc[:nrows, 4p:4p+4]``; writes fx, fy, fm (the unbalanced contact
     force and moment), v^{n+1/2}, w and x^{n+1}, and copies x, y, vx, vy, w into the packed
     ``kin[8p:8p+5]`` that the pair passes read (one cache line per particle).
+
+    With ``sleep``: a free particle that moved less than ``sleep_d`` per step with an unbalanced
+    force below ``sleep_ratio`` × the sum of its pair-force magnitudes for ``sleep_steps``
+    consecutive steps falls asleep (v = w = 0, fix bit 8, ``kin[8p+6]`` = 1); a sleeping
+    particle is not integrated and wakes when a pair or wall contact around it moved more than
+    ``sleep_d`` in the last step (a vote in slot 3 of its buffer).
 
     Returns
     -------
@@ -101,20 +108,31 @@ def particle_range(lo, hi, nrows, dt, alpha, step_lim, x, y, vx, vy, w, fx, fy, 
         sx = acc[0, o]
         sy = acc[0, o + 1]
         sm = acc[0, o + 2]
+        s3 = acc[0, o + 3]
         acc[0, o] = 0.0
         acc[0, o + 1] = 0.0
         acc[0, o + 2] = 0.0
+        acc[0, o + 3] = 0.0
         for c in range(1, nrows):
             sx += acc[c, o]
             sy += acc[c, o + 1]
             sm += acc[c, o + 2]
+            s3 += acc[c, o + 3]
             acc[c, o] = 0.0
             acc[c, o + 1] = 0.0
             acc[c, o + 2] = 0.0
+            acc[c, o + 3] = 0.0
         fx[p] = sx
         fy[p] = sy
         fm[p] = sm
         f = fix[p]
+        if sleep and f & 8:
+            if s3 > 0.0:
+                # woken: integrate from the next step, once all its pairs are summed again
+                fix[p] = f & ~8
+                quiet[p] = 0
+                kin[8 * p + 6] = 0.0
+            continue
         if f & 1:
             vx[p] = fvx[p]
         else:
@@ -148,6 +166,21 @@ def particle_range(lo, hi, nrows, dt, alpha, step_lim, x, y, vx, vy, w, fx, fy, 
         kin[k + 4] = w[p]
         if not (abs(ux) + abs(uy) <= step_lim * r[p]) and bad < 0:
             bad = p
+        if sleep and f == 0:
+            if (abs(ux) + abs(uy) + abs(w[p]) * r[p] * dt < sleep_d
+                    and abs(sx) + abs(sy) <= sleep_ratio * s3):
+                quiet[p] += 1
+                if quiet[p] >= sleep_steps:
+                    fix[p] = 8
+                    vx[p] = 0.0
+                    vy[p] = 0.0
+                    w[p] = 0.0
+                    kin[k + 2] = 0.0
+                    kin[k + 3] = 0.0
+                    kin[k + 4] = 0.0
+                    kin[k + 6] = 1.0
+            else:
+                quiet[p] = 0
         ex = x[p] - x0[p]
         ey = y[p] - y0[p]
         d2 = ex * ex + ey * ey
@@ -165,16 +198,20 @@ def gather_range(lo, hi, nrows, fx, fy, fm, acc):
         sx = acc[0, o]
         sy = acc[0, o + 1]
         sm = acc[0, o + 2]
+        s3 = acc[0, o + 3]
         for c in range(1, nrows):
             sx += acc[c, o]
             sy += acc[c, o + 1]
             sm += acc[c, o + 2]
+            s3 += acc[c, o + 3]
             acc[c, o] = 0.0
             acc[c, o + 1] = 0.0
             acc[c, o + 2] = 0.0
+            acc[c, o + 3] = 0.0
         acc[0, o] = sx
         acc[0, o + 1] = sy
         acc[0, o + 2] = sm
+        acc[0, o + 3] = s3
         fx[p] = sx
         fy[p] = sy
         fm[p] = sm
@@ -182,7 +219,7 @@ def gather_range(lo, hi, nrows, fx, fy, fm, acc):
 
 @njit
 def pairs_chunk(c, nchunks, step, dt, use_dash, kin, bi, bj, bstate, bf, npb, nsj, ci, cj, cf,
-                nc, acc):
+                nc, acc, sleep, sleep_d):
     """All pair laws of chunk ``c`` (its share of parallel bonds, smooth joints and contacts),
     accumulated into ``acc`` (this chunk's buffer row).
 
@@ -203,14 +240,14 @@ def pairs_chunk(c, nchunks, step, dt, use_dash, kin, bi, bj, bstate, bf, npb, ns
         nbreak, bworst, kb = pb_range(lo, hi, step, dt, kin, bi, bj, bstate, bf[FN], bf[FS],
                                       bf[MB], bf[KNA], bf[KSA], bf[KNI], bf[ARI], bf[TENA],
                                       bf[COHA], bf[TANFA], bf[LFS], bf[LFN], bf[LKN], bf[LKS],
-                                      bf[LMU], bf[LCN], bf[LCS], acc, bf[BRK_X], bf[BRK_Y],
+                                      bf[LMU], bf[LCN], bf[LCS], acc, sleep, sleep_d, bf[BRK_X], bf[BRK_Y],
                                       bf[BRK_NX], bf[BRK_NY], bf[BRK_STEP])
     if nsj > 0:
         lo = npb + (nsj * c) // nchunks
         hi = npb + (nsj * (c + 1)) // nchunks
         nbreak += sj_range(lo, hi, step, dt, kin, bi, bj, bstate, bf[FN], bf[FS],
                            bf[UN], bf[KNA], bf[KSA], bf[TENA], bf[COHA], bf[TANFA], bf[FRIC],
-                           bf[TANDIL], bf[NJX], bf[NJY], acc, bf[BRK_X], bf[BRK_Y], bf[BRK_NX],
+                           bf[TANDIL], bf[NJX], bf[NJY], acc, sleep, sleep_d, bf[BRK_X], bf[BRK_Y], bf[BRK_NX],
                            bf[BRK_NY], bf[BRK_STEP])
     worst = 0.0
     kworst = -1
@@ -220,10 +257,12 @@ def pairs_chunk(c, nchunks, step, dt, use_dash, kin, bi, bj, bstate, bf, npb, ns
         if use_dash:
             worst, kworst = contact_range_dashpot(lo, hi, dt, kin, ci, cj,
                                                   cf[C_FS], cf[C_KN], cf[C_KS], cf[C_MU],
-                                                  cf[C_CN], cf[C_CS], cf[C_FN], acc)
+                                                  cf[C_CN], cf[C_CS], cf[C_FN], acc,
+                                                  sleep, sleep_d)
         else:
             worst, kworst = contact_range(lo, hi, dt, kin, ci, cj, cf[C_FS],
-                                          cf[C_KN], cf[C_KS], cf[C_MU], cf[C_FN], acc)
+                                          cf[C_KN], cf[C_KS], cf[C_MU], cf[C_FN], acc, sleep,
+                                          sleep_d)
     if bworst > worst:
         # overlap records of bonded pairs are encoded as -(bond index) - 2
         worst = bworst
@@ -234,7 +273,7 @@ def pairs_chunk(c, nchunks, step, dt, use_dash, kin, bi, bj, bstate, bf, npb, ns
 @njit(parallel=True)
 def run_steps(nsteps, step0, dt, alpha, nchunks, skin, step_lim, overlap_lim, t, servo_alpha,
               pf, fix, bi, bj, bstate, bf, npb, ci, cj, cf, nc, use_dash, wf, qp, qw, qf, nq,
-              acc, refresh, info):
+              acc, refresh, sleep, sleep_d, sleep_ratio, sleep_steps, quiet, info):
     """Run up to ``nsteps`` steps in place (PFC cycle order).
 
     Each step: (1) particle pass: sum the force buffers (F^n), local damping with v^{n-1/2},
@@ -269,6 +308,9 @@ def run_steps(nsteps, step0, dt, alpha, nchunks, skin, step_lim, overlap_lim, t,
     refresh : bool
         First re-evaluate all pair and wall forces at the current positions with zero
         increments (after a list rebuild, or after loading).
+    sleep, sleep_d, sleep_ratio, sleep_steps, quiet
+        Sleeping particles (see :func:`particle_range`); ``quiet`` (N,) int32 counts quiet
+        steps. With ``sleep`` False nothing of it runs.
     info : (8,) float64, written
         [bond breaks, cause code, worst index, damping work (added), worst overlap ratio,
         max displacement, unused, unused].
@@ -308,6 +350,7 @@ def run_steps(nsteps, step0, dt, alpha, nchunks, skin, step_lim, overlap_lim, t,
             kin[k + 3] = vy[p]
             kin[k + 4] = w[p]
             kin[k + 5] = r[p]
+            kin[k + 6] = 1.0 if fix[p] & 8 else 0.0
     if refresh:
         acc[:, :] = 0.0
     s = -1 if refresh else 0
@@ -323,7 +366,7 @@ def run_steps(nsteps, step0, dt, alpha, nchunks, skin, step_lim, overlap_lim, t,
                 dres[c], kres[c], wres[c] = particle_range(
                     lo, hi, nchunks, dt, alpha, step_lim, x, y, vx, vy, w, pf[FX], pf[FY],
                     pf[FM], r, pf[INVM], pf[INVI], pf[X0], pf[Y0], pf[FVX], pf[FVY], pf[FW],
-                    fix, acc, kin)
+                    fix, acc, kin, sleep, sleep_d, sleep_ratio, sleep_steps, quiet)
             maxd2 = 0.0
             bad = -1
             for c in range(nchunks):
@@ -343,7 +386,8 @@ def run_steps(nsteps, step0, dt, alpha, nchunks, skin, step_lim, overlap_lim, t,
         # 3. all pairs, one region
         for c in prange(nchunks):
             bres[c], ores[c], kres[c] = pairs_chunk(c, nchunks, step, dti, use_dash, kin, bi, bj,
-                                                    bstate, bf, npb, nsj, ci, cj, cf, nc, acc[c])
+                                                    bstate, bf, npb, nsj, ci, cj, cf, nc, acc[c],
+                                                    sleep, sleep_d)
         worst = 0.0
         kworst = -1
         for c in range(nchunks):
@@ -356,7 +400,8 @@ def run_steps(nsteps, step0, dt, alpha, nchunks, skin, step_lim, overlap_lim, t,
         qworst = -1
         if has_walls:
             wworst, qworst = wall_forces(dti, x, y, vx, vy, w, r, acc[0], wf, qp, qw, nq,
-                                         qf[Q_FS], qf[Q_KN], qf[Q_KS], qf[Q_MU], qf[Q_FN])
+                                         qf[Q_FS], qf[Q_KN], qf[Q_KS], qf[Q_MU], qf[Q_FN],
+                                         kin, sleep, sleep_d)
         info[4] = max(worst, wworst)
         if worst > overlap_lim:
             info[1] = 3.0 if kworst >= 0 else 5.0

@@ -132,7 +132,10 @@ class Simulation:
         and moment of inertia are set to k/f² so that all particles are critically stable.
         Time and velocities lose their physical meaning; use only to pack or equilibrate.
     sleep : bool
-        Not implemented; must be False.
+        Let settled particles sleep (not integrated; pairs between two sleepers skipped) and
+        wake when a pair or wall contact around them moves (thresholds ``sleep_disp`` ×
+        mean radius per step, ``sleep_force_ratio``, ``sleep_steps``; sim.config). Off by
+        default: it trades exactness for speed in large, mostly static models.
     skin : float, optional
         Verlet skin, m (default config.SKIN_FACTOR × mean radius).
     pb_mcf : float
@@ -163,7 +166,10 @@ class Simulation:
     def __init__(self, specimen: Specimen, *, damping: float = config.DAMPING,
                  timestep_factor: float = config.TIMESTEP_FACTOR, dashpot_ratio=0.0,
                  density_scale: bool = False, sleep: bool = False, skin: float | None = None,
-                 pb_mcf: float = 1.0, sj_dilation_deg: float = 0.0):
+                 pb_mcf: float = 1.0, sj_dilation_deg: float = 0.0,
+                 sleep_disp: float = config.SLEEP_DISP,
+                 sleep_force_ratio: float = config.SLEEP_FORCE_RATIO,
+                 sleep_steps: int = config.SLEEP_STEPS):
         if not isinstance(specimen, Specimen):
             raise TypeError("specimen: expected a sim.Specimen")
         _set_wait_policy()
@@ -175,8 +181,12 @@ class Simulation:
         beta = np.broadcast_to(np.asarray(dashpot_ratio, float), (2,))
         if np.any(beta < 0) or np.any(beta >= 1):
             raise InputError(f"dashpot_ratio = {dashpot_ratio}: expected 0 <= beta < 1")
-        if sleep:
-            raise InputError("sleep = True: sleeping particles are not implemented; use False")
+        if sleep and not (sleep_disp > 0 and sleep_force_ratio > 0 and sleep_steps >= 1):
+            raise InputError("sleep_disp, sleep_force_ratio: expected > 0; sleep_steps >= 1")
+        self.sleep = bool(sleep)
+        self.sleep_disp = float(sleep_disp)
+        self.sleep_force_ratio = float(sleep_force_ratio)
+        self.sleep_steps = int(sleep_steps)
         self.specimen = specimen
         self.damping = float(damping)
         self.timestep_factor = float(timestep_factor)
@@ -194,6 +204,7 @@ class Simulation:
         self.damping_work = 0.0
         self.cracks = CrackLog()
         self.state = self._initial_state(specimen)
+        self._rmean = float(np.mean(specimen.r))
         self._info = np.zeros(8)
         self.rebuild()
 
@@ -253,7 +264,8 @@ class Simulation:
         # every bonded pair stays out of the Verlet contact list
         excl_ptr, excl_adj = partner_csr(n, bi, bj)
         cap = 0
-        return State(pf=pf, fix=np.zeros(n, np.int8), mineral=sp.mineral.copy(),
+        return State(pf=pf, fix=np.zeros(n, np.int8), quiet=np.zeros(n, np.int32),
+                     mineral=sp.mineral.copy(),
                      grain=sp.grain.copy(), pid=np.arange(n, dtype=np.int64), bf=bf, bi=bi, bj=bj,
                      bkind=bkind, bstate=np.zeros(nb, np.int8), bid=order.astype(np.int64),
                      excl_ptr=excl_ptr, excl_adj=excl_adj,
@@ -407,7 +419,9 @@ class Simulation:
                 left, step0, dt, self.damping, nch, self.skin, config.MAX_STEP_DISPLACEMENT,
                 config.MAX_OVERLAP, config.THICKNESS, config.SERVO_ALPHA, st.pf, st.fix, st.bi,
                 st.bj, st.bstate, st.bf, st.npb, st.ci, st.cj, st.cf, st.nc, use_dash, st.wf,
-                st.qp, st.qw, st.qf, st.nq, st.acc, self._refresh, info)
+                st.qp, st.qw, st.qf, st.nq, st.acc, self._refresh, self.sleep,
+                self.sleep_disp * self._rmean, self.sleep_force_ratio, self.sleep_steps,
+                st.quiet, info)
             self._refresh = False
             self.step += int(done)
             self.time += int(done) * dt
@@ -494,6 +508,8 @@ class Simulation:
         """
         p = self._idx(idx)
         st = self.state
+        st.fix[p] &= np.int8(~8)  # wake
+        st.quiet[p] = 0
         for comp, flag, frow, vrow in ((vx, FIX_X, FVX, VX), (vy, FIX_Y, FVY, VY),
                                        (w, FIX_ROTATION, FW, W)):
             if comp is not None:
@@ -503,12 +519,21 @@ class Simulation:
                 st.pf[vrow, p] = comp
 
     def free(self, idx) -> None:
-        """Release particles ``idx`` from any prescribed velocity."""
-        self.state.fix[self._idx(idx)] = 0
+        """Release particles ``idx`` from any prescribed velocity (and wake them)."""
+        p = self._idx(idx)
+        self.state.fix[p] = 0
+        self.state.quiet[p] = 0
+
+    @property
+    def asleep(self):
+        """(N,) bool: particles currently asleep (only with ``sleep=True``)."""
+        return (self.state.fix & 8) != 0
 
     def set_velocity(self, idx, vx: float, vy: float, w: float = 0.0) -> None:
         """Set the current velocity of (free) particles ``idx``."""
         p = self._idx(idx)
+        self.state.fix[p] &= np.int8(~8)  # wake
+        self.state.quiet[p] = 0
         self.state.pf[VX, p] = vx
         self.state.pf[VY, p] = vy
         self.state.pf[W, p] = w
@@ -728,7 +753,7 @@ class Simulation:
         qp, qw = new[st.qp[:st.nq][kq]].astype(np.int32), st.qw[:st.nq][kq]
         excl_ptr, excl_adj = partner_csr(n, bi, bj)
         pf = st.pf[:, keep].copy()
-        self.state = State(pf=pf, fix=st.fix[keep], mineral=st.mineral[keep],
+        self.state = State(pf=pf, fix=st.fix[keep], quiet=st.quiet[keep], mineral=st.mineral[keep],
                            grain=st.grain[keep], pid=st.pid[keep], bf=st.bf[:, kb].copy(),
                            bi=bi, bj=bj, bkind=st.bkind[kb], bstate=st.bstate[kb],
                            bid=st.bid[kb], excl_ptr=excl_ptr, excl_adj=excl_adj, cf=cf.copy(),
@@ -752,7 +777,8 @@ class Simulation:
                     dashpot=list(self.dashpot), density_scale=self.density_scale,
                     skin=self.skin, pb_mcf=self.pb_mcf, sj_dilation_deg=self.sj_dilation_deg,
                     damping_work=self.damping_work, kspread=getattr(self, "_kspread", None),
-                    refresh=bool(self._refresh))
+                    refresh=bool(self._refresh), sleep=self.sleep, sleep_disp=self.sleep_disp,
+                    sleep_force_ratio=self.sleep_force_ratio, sleep_steps=self.sleep_steps)
         arrays = {"sim_meta": np.array(json.dumps(meta))}
         arrays.update({"state__" + k: v for k, v in self.state.to_dict().items()})
         arrays.update({"spec__" + k: v for k, v in self.specimen.to_arrays().items()})
@@ -803,6 +829,11 @@ class Simulation:
         self.dt = float(meta["dt"])
         self.damping_work = float(meta["damping_work"])
         self._refresh = bool(meta["refresh"])
+        self.sleep = bool(meta["sleep"])
+        self.sleep_disp = float(meta["sleep_disp"])
+        self.sleep_force_ratio = float(meta["sleep_force_ratio"])
+        self.sleep_steps = int(meta["sleep_steps"])
+        self._rmean = float(np.mean(spec.r))
         if meta.get("kspread") is not None:
             self._kspread = meta["kspread"]
         self.state = State.from_dict({k[7:]: v for k, v in data.items()

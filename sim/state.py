@@ -17,7 +17,8 @@ NPF = 18
 PF_NAMES = ("x", "y", "vx", "vy", "w", "fx", "fy", "fm", "r", "invm", "invi", "x0", "y0",
             "fvx", "fvy", "fw", "mass", "inertia")
 
-# particle fix flags (int8): bit 0 vx prescribed, bit 1 vy prescribed, bit 2 rotation prescribed
+# particle fix flags (int8): bit 0 vx prescribed, bit 1 vy prescribed, bit 2 rotation prescribed,
+# bit 3 asleep (Simulation(sleep=True))
 FIX_X = 1
 FIX_Y = 2
 FIX_ROTATION = 4
@@ -56,6 +57,8 @@ class State:
     pf : (18, N) ndarray of float64
         Particle table, rows ``X, Y, VX, ...`` (see module constants).
     fix, mineral, grain : (N,) ndarray of int8, int32, int32
+    quiet : (N,) ndarray of int32
+        Consecutive quiet steps (sleep test).
     pid : (N,) ndarray of int64
         Specimen index of each particle (differs from the position once particles are removed).
     bf : (28, B) ndarray of float64
@@ -75,7 +78,7 @@ class State:
         Walls and wall contacts.
     """
 
-    ARRAYS = ("pf", "fix", "mineral", "grain", "pid", "bf", "bi", "bj", "bkind", "bstate", "bid",
+    ARRAYS = ("pf", "fix", "quiet", "mineral", "grain", "pid", "bf", "bi", "bj", "bkind", "bstate", "bid",
               "excl_ptr", "excl_adj", "cf", "ci", "cj", "cstart", "wf", "qf", "qp", "qw", "logged")
 
     def __init__(self, **arrays):

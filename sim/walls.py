@@ -30,11 +30,13 @@ from .state import (
 
 
 @njit
-def wall_forces(dt, x, y, vx, vy, w, r, acc, wf, qp, qw, nq, qfs, qkn, qks, qmu, qfn):
+def wall_forces(dt, x, y, vx, vy, w, r, acc, wf, qp, qw, nq, qfs, qkn, qks, qmu, qfn, kin, sleep,
+                sleep_d):
     """Wall contacts and wall forces for one step (serial; W and Q are small).
 
     ``dt`` only scales the shear increment (0 re-evaluates the forces without motion).
-    Adds the wall forces on the particles to the force buffer ``acc`` (``acc[4p:4p+3]``), writes
+    Adds the wall forces on the particles to the force buffer ``acc`` (``acc[4p:4p+3]``; with
+    ``sleep`` also slot 3: |F| for awake particles, a wake vote for sleeping ones), writes
     the shear history ``qfs`` and normal force ``qfn`` of each wall contact, and the wall
     table columns W_FX, W_FY (force by the particles on the wall) and W_KTOT.
 
@@ -75,6 +77,12 @@ def wall_forces(dt, x, y, vx, vy, w, r, acc, wf, qp, qw, nq, qfs, qkn, qks, qmu,
         acc[4 * p] += fx
         acc[4 * p + 1] += fy
         acc[4 * p + 2] -= a * fs
+        if sleep:
+            if kin[8 * p + 6] > 0.0:
+                if (abs(dvx) + abs(dvy)) * dt > sleep_d:
+                    acc[4 * p + 3] += 1.0
+            else:
+                acc[4 * p + 3] += abs(fx) + abs(fy)
         wf[k, W_FX] -= fx
         wf[k, W_FY] -= fy
         wf[k, W_KTOT] += qkn[q]

@@ -155,8 +155,8 @@ def test_fix_and_free_and_bad_input():
         sim.fix_velocity([99], 0.0, 0.0)
     with pytest.raises(InputError, match="damping"):
         Simulation(s, damping=1.5)
-    with pytest.raises(InputError, match="sleep"):
-        Simulation(s, sleep=True)
+    with pytest.raises(InputError, match="sleep_steps"):
+        Simulation(s, sleep=True, sleep_steps=0)
     with pytest.raises(InputError, match="normal"):
         sim.add_wall((0, 0), (0, 0))
     with pytest.raises(InputError, match="wall 5"):
@@ -188,3 +188,36 @@ def test_remove_particles_excavates_a_hole():
     assert np.min(np.hypot(sim.x - cx, sim.y - cy)) > 2e-3
     with pytest.raises(InputError, match="every particle"):
         sim.remove_particles(np.ones(sim.n_particles, bool))
+
+
+def test_sleeping_particles_settle_wake_and_stay_close_to_the_exact_run():
+    """Sleep is off by default; when on, settled particles sleep, a moving wall wakes those it
+    reaches, and the result stays close to the run without sleep."""
+    def run(sleep):
+        s = Specimen.lattice(nx=30, ny=12, radius=1e-3, gap=2e-3)
+        sim = Simulation(s, damping=0.7, sleep=sleep, sleep_disp=1e-7, sleep_steps=50)
+        b = s.box
+        sim.add_wall((0.0, b[2]), (0.0, 1.0))
+        left = sim.add_wall((b[0], 0.0), (1.0, 0.0))
+        sim.fix_velocity(np.nonzero(sim.x > sim.x.max() - 1e-3)[0], 0.0, 0.0, 0.0)
+        sim.set_velocity(np.nonzero(sim.x < sim.x.max() - 1e-3)[0], 1e-4, 1e-4)
+        sim.cycle(9000)                    # settles
+        settled = sim.asleep.mean()
+        sim.set_wall_velocity(left, 1.0, 0.0)
+        sim.cycle(600)
+        sim.set_wall_velocity(left, 0.0, 0.0)
+        sim.cycle(9000)
+        return sim, settled
+
+    a, _ = run(False)
+    b, settled = run(True)
+    assert not a.asleep.any()
+    assert settled > 0.8                       # the free particles fell asleep
+    assert b.asleep.mean() > 0.5               # and most sleep again after the push
+    disp_a = a.x - a.specimen.x
+    disp_b = b.x - b.specimen.x
+    scale = np.abs(disp_a).max()
+    assert scale > 2e-6                        # the wall really pushed the lattice
+    assert np.max(np.abs(disp_b - disp_a)) < 0.05 * scale
+    fa, fb = a.wall_force(1)[0], b.wall_force(1)[0]
+    assert fb == pytest.approx(fa, rel=0.05)
