@@ -73,7 +73,7 @@ DEFAULT_POST_MODEL = {
     "scale": [0.4394, 0.1414, 0.1291, 0.4184, 0.0402, 0.0424, 1.2248, 0.2011],
     "coef": [-0.1815, -0.7929, 0.5274, -0.0418, -0.5316, -0.5838, 0.0796, 1.6036],
     "intercept": 0.6546,
-    "mixed_share": 0.05,
+    "mixed_share": 0.1,
     "window_px": WINDOW_PX,
     "link_px": float(LINK_PX),
 }
