@@ -109,13 +109,14 @@ RUN_SMOOTH_PX = 15
 MIN_RUN_PX = 25
 #: skeleton branches shorter than this (px) are spurs/steps: typed by their neighbours.
 SHORT_BRANCH_PX = 12
-#: branches meeting at a junction within this angle of a straight continuation are one trace.
-CONTINUE_DEG = 35.0
+#: branches meeting at a junction within this angle of a straight continuation are one trace
+#: (chosen with GAP_PX on the training seeds 100-111; docs/semkit_science.md).
+CONTINUE_DEG = 55.0
 #: branch ends closer than this (px) meet at one junction.
 JUNCTION_PX = 4.0
 #: branch ends of different objects up to this far apart (px), facing each other within
 #: CONTINUE_DEG, continue one trace across the gap (a crack broken by the threshold).
-GAP_PX = 8.0
+GAP_PX = 12.0
 # grains
 #: automatic class edges: these count percentiles of the equivalent diameters of each mineral.
 AUTO_CLASS_PERCENTILES = (10.0, 90.0)
