@@ -135,7 +135,9 @@ def calibrate_specimens(paths, *, out, params=None, targets=None, tol=0.03, acce
     def log(rec):
         with open(log_path, "a", encoding="utf-8") as f:
             f.write(json.dumps(json_ready(rec)) + "\n")
-        if progress:
+        if progress and rec["phase"] == "seed-failed":
+            print(f"[calibrate] seed {rec['seed']} failed: {rec['error'][:200]}", flush=True)
+        elif progress:
             errs = ", ".join(f"{k} {100 * v:+.1f}%" for k, v in rec["errors"].items())
             print(f"[calibrate] {rec['phase']} {rec['iteration']}"
                   f"{'' if rec['seed'] is None else ' seed ' + str(rec['seed'])}: {errs} "
@@ -145,7 +147,24 @@ def calibrate_specimens(paths, *, out, params=None, targets=None, tol=0.03, acce
              for s in specs]
     t0 = time.perf_counter()
     kw = {} if knobs is None else {"knobs": knobs}
-    seeds = (lambda p: [e(p) for e in evals]) if len(evals) > 1 else None
+    failures = []
+
+    def run_seeds(p):
+        # a seed whose test the engine cannot finish (InstabilityError before the peak, even
+        # after the time-step retry) is left out of the mean and listed in the report
+        out = []
+        for k, e in enumerate(evals):
+            try:
+                out.append(e(p))
+            except InstabilityError as exc:
+                failures.append({"specimen": str(paths[k]), "error": str(exc)})
+                log({"phase": "seed-failed", "iteration": len(failures) - 1, "seed": k,
+                     "errors": {}, "seconds": 0.0, "error": str(exc)})
+        if not out:
+            raise InstabilityError("every seed specimen failed: " + failures[-1]["error"])
+        return out
+
+    seeds = run_seeds if len(evals) > 1 else None
     res = calibrate(evals[0], start, targets=targets, tol=tol, accept=accept,
                     max_evaluations=max_evaluations, evaluate_seeds=seeds, progress=log, **kw)
     wall = time.perf_counter() - t0
@@ -156,8 +175,11 @@ def calibrate_specimens(paths, *, out, params=None, targets=None, tol=0.03, acce
     save_parameters(os.path.join(out, "calibrated_params.yaml"), res.params, header=header)
     rep = res.to_dict()
     rep.update(targets=targets, specimens=[str(p) for p in paths], wall_s=wall,
+               failed_seed_runs=failures,
                tension_test=tension_test, platen_velocity=platen_velocity)
     write_json_atomic(os.path.join(out, "calibration_report.json"), rep)
     write_text_atomic(os.path.join(out, "calibration_report.md"),
-                      report_markdown(res, targets, specimens=paths))
+                      report_markdown(res, targets, specimens=paths, extra="\n".join(
+                          f"- seed run left out (engine instability): {f['specimen']}: "
+                          f"{f['error'][:160]}" for f in failures)))
     return res

@@ -84,8 +84,9 @@ class TestResult:
             x = y = None
             if self.sim is not None and hasattr(self.sim, "x"):
                 x, y = self.sim.x, self.sim.y
+            mag = self.summary.get("options", {}).get("map_magnify", 20.0)
             self.files["crack_map.png"] = outputs.plot_crack_map(
                 self.specimen, self.cracks, os.path.join(out, "crack_map.png"), x=x, y=y,
-                magnify=self.summary.get("options", {}).get("map_magnify", 20.0),
-                title=f"{self.summary.get('test', '')}: {len(self.cracks)} cracks")
+                magnify=mag, title=f"{self.summary.get('test', '')}: {len(self.cracks)} cracks"
+                f" (grain displacements x{mag:g})")
         return self.files

@@ -76,7 +76,8 @@ def test_exact_power_law_needs_one_step_for_stiffness_and_few_for_strength():
     def evaluate(p):
         e = _mean_field(p, "pb_emod")
         t, c = _mean_field(p, "pb_ten"), _mean_field(p, "pb_coh")
-        return {"E": 0.5 * e, "UCS": 0.4 * t ** 0.3 * c ** 0.7, "sigma_t": 0.05 * t ** 0.9 * c ** 0.1}
+        return {"E": 0.5 * e, "UCS": 0.4 * t ** 0.3 * c ** 0.7,
+                "sigma_t": 0.05 * t ** 0.9 * c ** 0.1}
 
     res = cal.calibrate(evaluate, thesis_parameters(), tol=1e-6, max_evaluations=10)
     assert res.converged
@@ -123,3 +124,21 @@ def test_bad_arguments():
     with pytest.raises(KeyError, match="sigma_t"):
         cal.calibrate(lambda p: {"E": 1.0, "UCS": 1.0}, thesis_parameters())
     assert math.isclose(cal.initial_jacobian(["UCS"], cal.DEFAULT_KNOBS).sum(), 1.0)
+
+
+def test_report_and_parameter_file_of_a_calibration(tmp_path):
+    from sim.protocols.calibration import report_markdown
+    from sim.protocols.parameters import load_parameters, save_parameters
+
+    def seeds(p):
+        return [_surrogate(p, f) for f in (0.99, 1.01)]
+
+    res = cal.calibrate(_surrogate, thesis_parameters(), tol=0.01, evaluate_seeds=seeds)
+    md = report_markdown(res, TARGETS, specimens=["a.npz", "b.npz"])
+    assert f"evaluations in all: {res.n_evaluations}" in md
+    assert md.count("\n| search |") == res.n_iterations and md.count("\n| seed |") == 2
+    assert "| E | 65 GPa |" in md and "| sigma_t | 18 MPa |" in md
+    save_parameters(tmp_path / "p.yaml", res.params, header="calibrated")
+    back = load_parameters(tmp_path / "p.yaml")
+    assert back["minerals"]["pyroxene"]["pb_ten"] == pytest.approx(
+        res.params["minerals"]["pyroxene"]["pb_ten"], rel=1e-15)
