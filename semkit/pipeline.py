@@ -230,10 +230,11 @@ class CrackAnalysis:
         t["area_method"] = "count"
         if th.background is not None and t["thin"].any():
             # thin cracks never reach the midpoint: their area is their partial volume
-            pv = partial_volume_area(self.smooth, self.labels, self.n_objects,
-                                     background=th.background, crack_level=th.crack_level)
             thin = t["thin"].to_numpy()
             ids = t["crack_id"].to_numpy()[thin]
+            pv = partial_volume_area(self.smooth, self.labels, self.n_objects,
+                                     background=th.background, crack_level=th.crack_level,
+                                     ids=ids)
             px2 = self.pixel_size_um ** 2
             t.loc[thin, "area_px"] = pv[ids]
             t.loc[thin, "area_um2"] = pv[ids] * px2
@@ -374,6 +375,12 @@ def _write_tables(out, rows, cracks, order):
     return imgs, cr
 
 
+def _worker_init():
+    """One OpenCV thread per worker process: the processes are the parallelism."""
+    import cv2
+    cv2.setNumThreads(1)
+
+
 def analyse_folder(folder, out, *, jobs=None, progress=True, overlays=True, pixel_size_um=None,
                    labels=None, classes=None, **options):
     """Analyse every image of a folder; write ``images.csv``, ``cracks.csv`` and overlays.
@@ -446,7 +453,13 @@ def analyse_folder(folder, out, *, jobs=None, progress=True, overlays=True, pixe
                     _write_tables(out, rows, cracks, order)
                     last = time.monotonic()
         else:
-            with ProcessPoolExecutor(max_workers=jobs) as ex:
+            # forkserver: workers start from a clean process, never from a fork of one whose
+            # OpenCV / numba thread pools are running (which can deadlock)
+            import multiprocessing as mp
+            ctx = mp.get_context("forkserver" if "forkserver" in mp.get_all_start_methods()
+                                 else "spawn")
+            with ProcessPoolExecutor(max_workers=jobs, mp_context=ctx,
+                                     initializer=_worker_init) as ex:
                 futs = {ex.submit(analyse_file, p, manifest_row=mrows.get(p.name), **kw): p.name
                         for p in files}
                 for f in as_completed(futs):
