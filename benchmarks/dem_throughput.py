@@ -47,7 +47,7 @@ def _split(sim, reps=20):
     args = lambda n, refresh: (n, sim.step, sim.dt, sim.damping, nch, 1e30, 1e30, 1e30, 1.0,  # noqa
                                0.5, st.pf, st.fix, st.bi, st.bj, st.bstate, st.bf, st.npb, st.ci,
                                st.cj, st.cf, st.nc, False, st.wf, st.qp, st.qw, st.qf, st.nq,
-                               st.acc, refresh, info)
+                               st.acc, refresh, False, 0.0, 0.0, 1, st.quiet, info)
     t0 = time.perf_counter()
     for _ in range(reps):
         run_steps(*args(0, True))
@@ -154,7 +154,8 @@ def main(argv=None):
     with open(os.path.join(a.out, "dem_throughput.json"), "w") as f:
         json.dump(result, f, indent=2)
     lines = ["| N | threads | M particle-steps/s | M pair-steps/s | ns/particle-step "
-             "| CPU ns/particle-step | bonds/particle | rebuilds | broad phase | pairs | particles | engine MB "
+             "| CPU ns/particle-step | bonds/particle | rebuilds | broad phase | pairs | particles "
+             "| engine MB "
              "| load avg |",
              "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in rows:

@@ -37,11 +37,12 @@ def _sleep_slots(acc, i, j, si, sj, fx, fy, du, sleep_d):
 
 @njit
 def pb_range(lo, hi, step, dt, kin, bi, bj, bstate, fn_, fs_, mb_, kna_, ksa_, kni_, ari_, tena_,
-             coha_, tanfa_, lfs_, lfn_, lkn_, lks_, lmu_, lcn_, lcs_, acc, sleep, sleep_d, brk_x, brk_y, brk_nx,
+             coha_, tanfa_, lfs_, lfn_, lkn_, lks_, lmu_, lcn_, lcs_, use_dash, acc, sleep,
+             sleep_d, brk_x, brk_y, brk_nx,
              brk_ny, brk_step):
     """Parallel-bonded pairs ``lo:hi``: the bond (while intact) plus the linear contact part of
     the pair (whenever the balls overlap, bonded or not, with its own shear history and
-    dashpots ``lcn, lcs``, zero when the scene has none). These pairs are kept out of the
+    dashpots ``lcn, lcs``, read only when ``use_dash``). These pairs are kept out of the
     Verlet contact list, so each is computed once per step.
 
     Returns
@@ -110,8 +111,9 @@ def pb_range(lo, hi, step, dt, kin, bi, bj, bstate, fn_, fs_, mb_, kna_, ksa_, k
         fnl, fsl, on = linear_force_masked(ov, vt * dt, lkn_[b], lks_[b], lmu_[b], lfs_[b])
         ovp = ov * on
         lfs_[b] = fsl
-        fnl -= lcn_[b] * vn * on
-        fsl -= lcs_[b] * vt * on
+        if use_dash:
+            fnl -= lcn_[b] * vn * on
+            fsl -= lcs_[b] * vt * on
         lfn_[b] = fnl
         fn += fnl
         fs += fsl
@@ -137,7 +139,8 @@ def pb_range(lo, hi, step, dt, kin, bi, bj, bstate, fn_, fs_, mb_, kna_, ksa_, k
 
 @njit
 def sj_range(lo, hi, step, dt, kin, bi, bj, bstate, fn_, fs_, un_, kna_, ksa_,
-             tena_, coha_, tanfa_, fric_, tandil_, njx_, njy_, acc, sleep, sleep_d, brk_x, brk_y, brk_nx, brk_ny,
+             tena_, coha_, tanfa_, fric_, tandil_, njx_, njy_, acc, sleep, sleep_d, brk_x, brk_y,
+             brk_nx, brk_ny,
              brk_step):
     """Smooth joints ``lo:hi`` (forces along the fixed joint frame, no moment); returns breaks."""
     nbreak = 0

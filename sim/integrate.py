@@ -240,14 +240,16 @@ def pairs_chunk(c, nchunks, step, dt, use_dash, kin, bi, bj, bstate, bf, npb, ns
         nbreak, bworst, kb = pb_range(lo, hi, step, dt, kin, bi, bj, bstate, bf[FN], bf[FS],
                                       bf[MB], bf[KNA], bf[KSA], bf[KNI], bf[ARI], bf[TENA],
                                       bf[COHA], bf[TANFA], bf[LFS], bf[LFN], bf[LKN], bf[LKS],
-                                      bf[LMU], bf[LCN], bf[LCS], acc, sleep, sleep_d, bf[BRK_X], bf[BRK_Y],
-                                      bf[BRK_NX], bf[BRK_NY], bf[BRK_STEP])
+                                      bf[LMU], bf[LCN], bf[LCS], use_dash, acc, sleep, sleep_d,
+                                      bf[BRK_X], bf[BRK_Y], bf[BRK_NX], bf[BRK_NY],
+                                      bf[BRK_STEP])
     if nsj > 0:
         lo = npb + (nsj * c) // nchunks
         hi = npb + (nsj * (c + 1)) // nchunks
         nbreak += sj_range(lo, hi, step, dt, kin, bi, bj, bstate, bf[FN], bf[FS],
                            bf[UN], bf[KNA], bf[KSA], bf[TENA], bf[COHA], bf[TANFA], bf[FRIC],
-                           bf[TANDIL], bf[NJX], bf[NJY], acc, sleep, sleep_d, bf[BRK_X], bf[BRK_Y], bf[BRK_NX],
+                           bf[TANDIL], bf[NJX], bf[NJY], acc, sleep, sleep_d, bf[BRK_X], bf[BRK_Y],
+                           bf[BRK_NX],
                            bf[BRK_NY], bf[BRK_STEP])
     worst = 0.0
     kworst = -1

@@ -78,8 +78,9 @@ class State:
         Walls and wall contacts.
     """
 
-    ARRAYS = ("pf", "fix", "quiet", "mineral", "grain", "pid", "bf", "bi", "bj", "bkind", "bstate", "bid",
-              "excl_ptr", "excl_adj", "cf", "ci", "cj", "cstart", "wf", "qf", "qp", "qw", "logged")
+    ARRAYS = ("pf", "fix", "quiet", "mineral", "grain", "pid", "bf", "bi", "bj", "bkind",
+              "bstate", "bid", "excl_ptr", "excl_adj", "cf", "ci", "cj", "cstart", "wf", "qf", "qp",
+              "qw", "logged")
 
     def __init__(self, **arrays):
         for k in self.ARRAYS:
