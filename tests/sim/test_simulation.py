@@ -221,3 +221,17 @@ def test_sleeping_particles_settle_wake_and_stay_close_to_the_exact_run():
     assert np.max(np.abs(disp_b - disp_a)) < 0.05 * scale
     fa, fb = a.wall_force(1)[0], b.wall_force(1)[0]
     assert fb == pytest.approx(fa, rel=0.05)
+
+
+def test_critical_step_and_density_scaling():
+    """dt = f min sqrt(m/k); density scaling sets dt = 1 and m = k/f^2 (PFC timestep scale)."""
+    from sim.integrate import critical_timestep
+    s = Specimen.random_packing(300, seed=6)
+    sim = Simulation(s, timestep_factor=0.4)
+    dt_p, ktr, krot = critical_timestep(sim.state)
+    assert sim.dt == pytest.approx(0.4 * dt_p.min(), rel=1e-12)
+    assert np.all(dt_p <= np.sqrt(sim.mass / ktr) + 1e-30)
+    ds = Simulation(s, density_scale=True, timestep_factor=0.4)
+    assert ds.dt == 1.0
+    np.testing.assert_allclose(ds.mass[ktr > 0], ktr[ktr > 0] / 0.4 ** 2, rtol=1e-12)
+    assert ds.solve(1e-4, max_steps=20000) <= 1e-4    # packs to equilibrium, stably
