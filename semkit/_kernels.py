@@ -107,18 +107,17 @@ def thin_pixels(skel, rows, cols, lut1, lut2):
     Cost is K x iterations (about half the widest crack), independent of the image size.
     """
     k = rows.shape[0]
-    alive = np.ones(k, np.bool_)
+    act = np.arange(k)
     dele = np.zeros(k, np.bool_)
+    n_act = k
     n_iter = 0
     changed = True
     while changed:
         changed = False
         n_iter += 1
         for sub in range(2):
-            for p in range(k):
-                dele[p] = False
-                if not alive[p]:
-                    continue
+            for q in range(n_act):
+                p = act[q]
                 i = rows[p]
                 j = cols[p]
                 n = (skel[i, j + 1] | (skel[i - 1, j + 1] << 1) | (skel[i - 1, j] << 2)
@@ -126,14 +125,19 @@ def thin_pixels(skel, rows, cols, lut1, lut2):
                      | (skel[i + 1, j - 1] << 5) | (skel[i + 1, j] << 6)
                      | (skel[i + 1, j + 1] << 7))
                 if sub == 0:
-                    dele[p] = lut1[n]
+                    dele[q] = lut1[n]
                 else:
-                    dele[p] = lut2[n]
-            for p in range(k):
-                if dele[p]:
+                    dele[q] = lut2[n]
+            keep = 0  # delete after deciding (parallel thinning), compact the active list
+            for q in range(n_act):
+                p = act[q]
+                if dele[q]:
                     skel[rows[p], cols[p]] = 0
-                    alive[p] = False
                     changed = True
+                else:
+                    act[keep] = p
+                    keep += 1
+            n_act = keep
     return n_iter
 
 
