@@ -186,9 +186,10 @@ def _check(targets, knobs):
 
 
 def calibrate(evaluate, params: dict, *, targets=None, knobs=DEFAULT_KNOBS, tol: float = 0.03,
-              accept: float = 0.05, max_evaluations: int = 12, evaluate_seeds=None, seed_rounds: int = 2,
-              jacobian=None, max_log_step: float = math.log(4.0), progress=None
-              ) -> CalibrationResult:
+              accept: float = 0.05, max_evaluations: int = 12, evaluate_seeds=None,
+              seed_rounds: int = 2,
+              jacobian=None, max_log_step: float = math.log(4.0),
+              progress=None) -> CalibrationResult:
     """Find knob multipliers so that ``evaluate`` meets every target within ``tol``.
 
     Parameters
@@ -254,7 +255,8 @@ def calibrate(evaluate, params: dict, *, targets=None, knobs=DEFAULT_KNOBS, tol:
             missing = [k for k in names if k not in resp]
             if missing:
                 raise KeyError(f"evaluate() returned no '{missing[0]}' (expected {names})")
-            rec = {"phase": phase, "iteration": it, "seed": s if phase == "seed" else None,
+            seed = resp.get("specimen_index", s) if phase == "seed" else None
+            rec = {"phase": phase, "iteration": it, "seed": seed,
                    "multipliers": {k.name: float(m) for k, m in zip(knobs, mult)},
                    "responses": {k: float(resp[k]) for k in names},
                    "errors": _errors(resp, targets), "seconds": sec / len(resps)}

@@ -96,7 +96,7 @@ def report_markdown(result, targets, *, specimens=(), extra="") -> str:
 
 def calibrate_specimens(paths, *, out, params=None, targets=None, tol=0.03, accept=0.05,
                         max_evaluations=10, platen_velocity=None, tension_test="direct",
-                        progress=True, knobs=None):
+                        progress=True, knobs=None, search_on="first"):
     """Calibrate on specimen files and write the parameter file and the report into ``out``.
 
     Parameters
@@ -114,6 +114,10 @@ def calibrate_specimens(paths, *, out, params=None, targets=None, tol=0.03, acce
     platen_velocity : float, optional
         Loading speed of the tests, m/s (default: the protocols' default).
     tension_test : {"direct", "brazilian"}
+    search_on : {"first", "mean"}
+        ``first``: search on the first specimen, seeds at the end (the issue's sketch).
+        ``mean``: every search evaluation is the mean over all specimens (costs one run per
+        specimen, but targets the seed mean directly; use it when the seed spread is large).
 
     Returns
     -------
@@ -155,7 +159,7 @@ def calibrate_specimens(paths, *, out, params=None, targets=None, tol=0.03, acce
         out = []
         for k, e in enumerate(evals):
             try:
-                out.append(e(p))
+                out.append({**e(p), "specimen_index": k})
             except InstabilityError as exc:
                 failures.append({"specimen": str(paths[k]), "error": str(exc)})
                 log({"phase": "seed-failed", "iteration": len(failures) - 1, "seed": k,
@@ -165,7 +169,14 @@ def calibrate_specimens(paths, *, out, params=None, targets=None, tol=0.03, acce
         return out
 
     seeds = run_seeds if len(evals) > 1 else None
-    res = calibrate(evals[0], start, targets=targets, tol=tol, accept=accept,
+    if search_on not in ("first", "mean"):
+        raise ValueError(f"'search_on' = {search_on!r}, expected 'first' or 'mean'")
+    search = evals[0]
+    if search_on == "mean" and len(evals) > 1:
+        def search(p):
+            rs = run_seeds(p)
+            return {k: sum(r[k] for r in rs) / len(rs) for k in targets}
+    res = calibrate(search, start, targets=targets, tol=tol, accept=accept,
                     max_evaluations=max_evaluations, evaluate_seeds=seeds, progress=log, **kw)
     wall = time.perf_counter() - t0
     header = (f"Calibrated by gbmsim calibrate on {len(specs)} specimen(s); targets "
@@ -175,7 +186,7 @@ def calibrate_specimens(paths, *, out, params=None, targets=None, tol=0.03, acce
     save_parameters(os.path.join(out, "calibrated_params.yaml"), res.params, header=header)
     rep = res.to_dict()
     rep.update(targets=targets, specimens=[str(p) for p in paths], wall_s=wall,
-               failed_seed_runs=failures,
+               failed_seed_runs=failures, search_on=search_on,
                tension_test=tension_test, platen_velocity=platen_velocity)
     write_json_atomic(os.path.join(out, "calibration_report.json"), rep)
     write_text_atomic(os.path.join(out, "calibration_report.md"),

@@ -85,6 +85,8 @@ def register(subparsers):
     p.add_argument("--platen-velocity", type=float, default=None,
                    help="loading speed, m/s (default: the protocols' default)")
     p.add_argument("--tension-test", choices=("direct", "brazilian"), default="direct")
+    p.add_argument("--search-on", choices=("first", "mean"), default="first",
+                   help="search on the first specimen (seeds at the end) or on the seed mean")
     p.add_argument("--no-progress", action="store_true")
     p.set_defaults(func=run_calibrate_command)
     return subparsers
@@ -153,7 +155,7 @@ def run_calibrate_command(args) -> int:
                                   targets=targets, tol=args.tol, accept=args.accept,
                                   max_evaluations=args.max_evaluations,
                                   platen_velocity=args.platen_velocity,
-                                  tension_test=args.tension_test,
+                                  tension_test=args.tension_test, search_on=args.search_on,
                                   progress=not args.no_progress)
     except KeyboardInterrupt:
         print(f"interrupted: evaluations so far in {args.out}", file=sys.stderr)
