@@ -82,3 +82,15 @@ def test_despeckle_median_loses_thin_cracks_default_keeps_them():
     default = analyse_image(s.image).cracks["length_px"].sum()
     imagej = analyse_image(s.image, despeckle="median").cracks["length_px"].sum()
     assert imagej < 0.5 * default
+
+
+def test_sixteen_bit_images_measure_like_eight_bit():
+    from semkit.synth import make_sem_image
+    out = []
+    for bd in (8, 16):
+        s = make_sem_image((288, 384), n_cracks=8, widths=(2, 8), gradient=2.5, bit_depth=bd,
+                           seed=11)
+        c = analyse_image(s.image).cracks
+        out.append((c["area_px"].sum() / s.crack_area_px, c["length_px"].sum() / s.crack_length_px))
+    assert np.allclose(out[0], out[1], atol=0.02)
+    assert abs(out[1][0] - 1) < config.AREA_TOL_MAX and abs(out[1][1] - 1) < config.LENGTH_TOL_MAX
