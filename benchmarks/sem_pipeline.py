@@ -48,7 +48,6 @@ def _make(k, shape, folder):
 
 def _warm(_):
     import cv2
-    import numpy as np
     cv2.setNumThreads(1)
 
     from semkit.pipeline import analyse_image

@@ -65,7 +65,8 @@ def illumination_field(image, *, method="polynomial", degree=config.FLATTEN_POLY
         ``polynomial``: least-squares fit of a 2-D polynomial of ``degree`` to log(grey) on
         the shrunken image, refitted without the dark outliers (cracks, pores) and with each
         pixel's mineral level (a peak of the residual histogram) taken out, so that a region
-        rich in a bright mineral does not pass for a brightly lit one. ``gaussian``: grey closing (removes cracks)
+        rich in a bright mineral does not pass for a brightly lit one. ``gaussian``: grey
+        closing (removes cracks)
         then a Gaussian of sigma ``FLATTEN_GAUSS_FRACTION`` x the short side (rolling-ball-like).
     degree : int
     fit_size_px : int

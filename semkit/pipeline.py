@@ -93,7 +93,8 @@ class AnalysisOptions:
             parse_minerals(self.minerals)
         # --- end issue #3 ---
         if self.flatten not in ("polynomial", "gaussian", "none"):
-            raise InputError(f"flatten: expected polynomial, gaussian or none, got {self.flatten!r}")
+            raise InputError(f"flatten: expected polynomial, gaussian or none, "
+                             f"got {self.flatten!r}")
         if self.despeckle not in ("specks", "median", "none"):
             raise InputError(f"despeckle: expected specks, median or none, got {self.despeckle!r}")
         if not (self.denoise_sigma_px >= 0):

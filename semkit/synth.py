@@ -62,7 +62,8 @@ class SynthImage:
         mask), ``area_cov_px`` (partial-volume area: sum of the anti-aliased coverage; for
         1-px cracks the physically meaningful area), ``length_px`` (path length: main centreline +
         branches), ``trace_length_px`` (all drawn traces: layers and overlapping en-echelon
-        steps count each), ``width_px`` (nominal width), ``n_traces, n_branches, debris_px, n_grains, orientation_deg``.
+        steps count each), ``width_px`` (nominal width), ``n_traces, n_branches,
+        debris_px, n_grains, orientation_deg``.
     grains : DataFrame
         One row per grain: ``grain_id, mineral`` (name), ``mineral_idx, area_px, eq_diameter_px``.
     mineral_names : tuple of str
@@ -111,7 +112,8 @@ def _grain_map(shape, mean_grain_px, rng):
     margin = 2.0 * mean_grain_px
     area = (h + 2 * margin) * (w + 2 * margin)
     n = max(int(area / (0.9 * mean_grain_px ** 2)), 4)
-    seeds = np.column_stack([rng.uniform(-margin, w + margin, n), rng.uniform(-margin, h + margin, n)])
+    seeds = np.column_stack([rng.uniform(-margin, w + margin, n),
+                             rng.uniform(-margin, h + margin, n)])
     yy, xx = np.mgrid[0:h, 0:w]
     tree = cKDTree(seeds)
     _, idx = tree.query(np.column_stack([xx.ravel(), yy.ravel()]).astype(np.float64), workers=-1)
@@ -352,7 +354,8 @@ def make_sem_image(shape=(768, 1024), *, stage="pre", n_cracks=None, widths=(1.0
     names = tuple(m[0] for m in minerals)
     greys = np.array([m[1] for m in minerals], float)
     share = np.array([m[2] for m in minerals], float)
-    grain_mineral = rng.choice(len(minerals), size=n_grains + 1, p=share / share.sum()).astype(np.int32)
+    grain_mineral = rng.choice(len(minerals), size=n_grains + 1,
+                               p=share / share.sum()).astype(np.int32)
     grain_mineral[0] = 0
     mineral_labels = grain_mineral[grain_labels]
     boundary = _boundary_mask(grain_labels)
@@ -426,7 +429,8 @@ def make_sem_image(shape=(768, 1024), *, stage="pre", n_cracks=None, widths=(1.0
                 k = int(rng.integers(len(rp) // 3, max(2 * len(rp) // 3, len(rp) // 3 + 1)))
                 d = rp[min(k + 1, len(rp) - 1)] - rp[max(k - 1, 0)]
                 ang_b = math.atan2(d[1], d[0]) + rng.choice([-1, 1]) * rng.uniform(0.45, 1.0)
-                br = _walk(rp[k], ang_b, rng.uniform(0.2, 0.5) * _polylen(path), 0.015, rng, inside_img)
+                br = _walk(rp[k], ang_b, rng.uniform(0.2, 0.5) * _polylen(path), 0.015, rng,
+                           inside_img)
                 if _polylen(br) >= 15:
                     mains.append(br)
                     n_branches = 1
@@ -480,7 +484,8 @@ def make_sem_image(shape=(768, 1024), *, stage="pre", n_cracks=None, widths=(1.0
                          trace_length_px=trace_length, width_px=width,
                          n_traces=len(traces), n_branches=n_branches, debris_px=debris_px,
                          n_grains=len(_grains_on(all_pts, grain_labels)),
-                         orientation_deg=float(np.degrees(np.arctan2(-chord[1], chord[0])) % 180.0)))
+                         orientation_deg=float(np.degrees(np.arctan2(-chord[1], chord[0]))
+                                               % 180.0)))
         all_traces.append(traces + debris)
     cracks = pd.DataFrame(rows, columns=["crack_id", "type_pre", "type_post", "area_px",
                                          "area_cov_px", "length_px", "trace_length_px",

@@ -2,11 +2,16 @@
 import math
 
 import numpy as np
+from test_skeleton import stadium
 
 from semkit import config
-from semkit.cleanup import (bridge_gaps, despeckle_median, fill_holes, remove_small_objects,
-                            remove_specks)
-from test_skeleton import stadium
+from semkit.cleanup import (
+    bridge_gaps,
+    despeckle_median,
+    fill_holes,
+    remove_small_objects,
+    remove_specks,
+)
 
 
 def test_median_despeckle_erases_one_pixel_cracks_issue_2():

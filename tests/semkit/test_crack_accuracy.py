@@ -7,12 +7,11 @@ cracks measured within THIN_LENGTH_TOL or flagged, never silently lost.
 """
 import numpy as np
 import pytest
+from _synth_cases import SEEDS, case
 from scipy import ndimage as ndi
 
 from semkit import config
 from semkit.pipeline import analyse_image
-
-from _synth_cases import SEEDS, case
 
 
 def _errors(gradient):

@@ -1,4 +1,4 @@
-"""semkit.io: reading images and finding the pixel size (manifest, TIFF tags, magnification, CLI)."""
+"""semkit.io: reading images and the pixel size (manifest, TIFF tags, magnification, CLI)."""
 import numpy as np
 import pandas as pd
 import pytest
@@ -6,8 +6,15 @@ import tifffile
 
 from semkit import config
 from semkit.errors import InputError
-from semkit.io import (load_image, magnification_pixel_size, read_image, read_manifest,
-                       resolve_pixel_size, tiff_pixel_size, write_image)
+from semkit.io import (
+    load_image,
+    magnification_pixel_size,
+    read_image,
+    read_manifest,
+    resolve_pixel_size,
+    tiff_pixel_size,
+    write_image,
+)
 
 IMG = (np.arange(40 * 50).reshape(40, 50) % 251).astype(np.uint8)
 

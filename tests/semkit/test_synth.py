@@ -1,10 +1,9 @@
 """semkit.synth: seeded synthetic SEM images and their ground truth."""
 import numpy as np
 import pytest
+from _synth_cases import case
 
 from semkit.synth import make_sem_image
-
-from _synth_cases import case
 
 
 def test_same_seed_same_image_bit_for_bit():

@@ -1,14 +1,19 @@
 """semkit.threshold and semkit.illumination: the auto method isolates the crack class."""
 import numpy as np
 import pytest
+from _synth_cases import case
 
 from semkit.cleanup import denoise
 from semkit.errors import InputError
 from semkit.illumination import flatten_illumination
-from semkit.threshold import (crack_mask, dark_class_levels, noise_sigma, parse_method,
-                              threshold_local, threshold_otsu)
-
-from _synth_cases import case
+from semkit.threshold import (
+    crack_mask,
+    dark_class_levels,
+    noise_sigma,
+    parse_method,
+    threshold_local,
+    threshold_otsu,
+)
 
 
 def test_parse_method():
