@@ -96,7 +96,7 @@ def test_classify_train_cli_and_labels_override(folder, tmp_path):
     assert main(["classify", str(d), "--train", str(tmp_path / "labels.csv"), "--out",
                  str(model)]) == 0
     m = json.loads(model.read_text())
-    assert len(m["coef"]) == 8 and 0 < m["mixed_share"] < 1
+    assert len(m["coef"]) == 13 and len(m["trace_coef"]) == 23 and len(m["trace_coef"][0]) == 3
     out2 = tmp_path / "out2"
     assert main(["analyse", str(d), "--out", str(out2), "--jobs", "1", "--no-progress",
                  "--no-overlay", "--crack-model", str(model), "--labels",
