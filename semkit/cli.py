@@ -214,7 +214,7 @@ def _run_classify(args):
     model = train_from_folder(args.folder, read_labels(args.train),
                               pixel_size_um=args.pixel_size_um, seed=args.seed)
     save_model(model, args.out)
-    print(f"wrote crack model to {args.out} (mixed_share={model['mixed_share']})")
+    print(f"wrote crack model to {args.out} ({len(model['trace_coef'])} trace-model terms)")
     return 0
 # --- end issue #3 ------------------------------------------------------------------------
 
