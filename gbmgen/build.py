@@ -287,7 +287,8 @@ def build_specimen(table: GrainSizeTable | None = None, *, width_mm, height_mm, 
         "fidelity": fid,
     }
     spec = Specimen(x=x, y=y, r=r, mineral=mineral, grain=grain,
-                    mineral_names=np.array(names), **mineral_props, **prm.joint_arrays(),
+                    mineral_names=np.array(names), **mineral_props,
+                    **prm.joint_arrays(pb_emod=mineral_props["pb_emod"], r_mean=float(np.mean(r))),
                     **bonds, box=box, grain_xy=g.xy, grain_offsets=g.offsets,
                     grain_mineral=g.mineral, grain_class=g.klass, meta=meta)
     return spec.validate("gbmgen build"), timing

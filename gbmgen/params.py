@@ -6,10 +6,18 @@ File layout (SI units; angles in degrees)::
     minerals:
       pyroxene: {density: 2500, emod: 58.0e+9, kratio: 1.5, fric: 1.0, pb_emod: 58.0e+9,
                  pb_kratio: 2.0, pb_ten: 300.0e+6, pb_coh: 250.0e+6, pb_fa: 35, pb_rmul: 1.0}
-    smooth_joint: {sj_kn: 4.0e+9, sj_ks: 2.0e+9, sj_ten: 10.0e+6, sj_coh: 60.0e+6,
-                   sj_fa: 32, sj_fric: 1.0}
+    joint: {sj_kn: bond, sj_ks: bond, sj_ten: 10.0e+6, sj_coh: 60.0e+6, sj_fa: 32, sj_fric: 1.0}
 
-The key names are those of ``specimen.npz`` (DESIGN.md §4). Presets ``thesis-ch4`` and
+The key names are those of ``specimen.npz`` (DESIGN.md §4). This is the same layout that
+``gbmsim calibrate`` writes (:mod:`sim.protocols.parameters`), so a calibrated file can be
+passed back to ``gbmgen build --params``. ``smooth_joint`` is read as a synonym of ``joint``.
+
+``sj_kn: bond`` and ``sj_ks: bond`` ask for a joint as stiff as a parallel bond between two
+particles of the mean radius r̄: ``sj_kn = mean(pb_emod) / (2 r̄)`` (Pa/m) and
+``sj_ks = sj_kn / 2`` (the thesis's tabled joint kn/ks of 2). The thesis presets use it because
+Table 4-4's 4e9 / 2e9 Pa/m, read literally, makes every joint contact ~1e5 times softer than the
+bonds and a Scenario-1 specimen ~1e4 times too soft (E ≈ 0.005 GPa measured; REFERENCE.md
+flags the value). Write numbers instead to use the table literally. Presets ``thesis-ch4`` and
 ``thesis-ch5`` ship in ``gbmgen/presets``.
 """
 from __future__ import annotations
@@ -25,7 +33,34 @@ from sim.specimen import JOINT_KEYS, MINERAL_KEYS
 
 from .errors import InputError
 
-__all__ = ["Params", "load_params", "PRESETS"]
+__all__ = ["Params", "load_params", "PRESETS", "bond_like_joint_stiffness"]
+
+#: Value of ``sj_kn`` / ``sj_ks`` that asks for a bond-like joint stiffness.
+BOND = "bond"
+
+
+def bond_like_joint_stiffness(pb_emod, r_mean):
+    """Joint stiffnesses per area equal to a parallel bond's between two mean particles.
+
+    Parameters
+    ----------
+    pb_emod : (M,) array_like of float, Pa
+        Bond moduli of the minerals (their plain mean is used).
+    r_mean : float, m
+        Mean particle radius.
+
+    Returns
+    -------
+    sj_kn, sj_ks : float, Pa/m
+        ``mean(pb_emod) / (2 r_mean)`` and half of it.
+
+    Examples
+    --------
+    >>> bond_like_joint_stiffness([60e9], 1e-4)
+    (300000000000000.0, 150000000000000.0)
+    """
+    kn = float(np.mean(pb_emod)) / (2.0 * float(r_mean))
+    return kn, kn / 2.0
 
 #: Named presets shipped as package data.
 PRESETS = ("thesis-ch4", "thesis-ch5")
@@ -59,8 +94,17 @@ class Params:
                 out[k][i] = self.minerals[key][k]
         return out
 
-    def joint_arrays(self) -> dict:
-        return {k: np.array([self.joint[k]], float) for k in JOINT_KEYS}
+    def joint_arrays(self, *, pb_emod=None, r_mean=None) -> dict:
+        """{key: (1,) float64}; ``bond`` stiffnesses need ``pb_emod`` and ``r_mean`` (m)."""
+        joint = dict(self.joint)
+        if BOND in (joint["sj_kn"], joint["sj_ks"]):
+            if pb_emod is None or r_mean is None:
+                raise InputError(f"{self.source}: 'joint.sj_kn: bond' needs the bond moduli and "
+                                 "the mean particle radius")
+            kn, ks = bond_like_joint_stiffness(pb_emod, r_mean)
+            joint["sj_kn"] = kn if joint["sj_kn"] == BOND else joint["sj_kn"]
+            joint["sj_ks"] = ks if joint["sj_ks"] == BOND else joint["sj_ks"]
+        return {k: np.array([joint[k]], float) for k in JOINT_KEYS}
 
 
 def _number(value, where):
@@ -76,7 +120,7 @@ def _number(value, where):
 def params_from_dict(data: dict, source: str = "params") -> Params:
     """Validate a parameter mapping (see the module docstring)."""
     if not isinstance(data, dict):
-        raise InputError(f"{source}: expected a mapping with 'minerals' and 'smooth_joint'")
+        raise InputError(f"{source}: expected a mapping with 'minerals' and 'joint'")
     minerals = data.get("minerals")
     if not isinstance(minerals, dict) or not minerals:
         raise InputError(f"{source}: field 'minerals' missing or empty, expected "
@@ -95,17 +139,22 @@ def params_from_dict(data: dict, source: str = "params") -> Params:
                 raise InputError(f"{source}: field 'minerals.{name}.{k}' = {row[k]:g}, "
                                  f"expected {'> 0' if positive else '>= 0'}")
         out[str(name)] = row
-    joint = data.get("smooth_joint")
+    jkey = "joint" if "joint" in data else "smooth_joint"
+    joint = data.get(jkey)
     if not isinstance(joint, dict):
-        raise InputError(f"{source}: field 'smooth_joint' missing, expected "
+        raise InputError(f"{source}: field 'joint' missing, expected "
                          f"{{{', '.join(JOINT_KEYS)}}}")
     jrow = {}
     for k in JOINT_KEYS:
         if k not in joint:
-            raise InputError(f"{source}: field 'smooth_joint.{k}' missing")
-        jrow[k] = _number(joint[k], f"{source}: field 'smooth_joint.{k}'")
+            raise InputError(f"{source}: field '{jkey}.{k}' missing")
+        if k in ("sj_kn", "sj_ks") and joint[k] == BOND:
+            jrow[k] = BOND
+            continue
+        jrow[k] = _number(joint[k], f"{source}: field '{jkey}.{k}'")
         if jrow[k] < 0 or (k in ("sj_kn", "sj_ks") and jrow[k] <= 0):
-            raise InputError(f"{source}: field 'smooth_joint.{k}' = {jrow[k]:g}, expected > 0")
+            raise InputError(f"{source}: field '{jkey}.{k}' = {jrow[k]:g}, expected > 0"
+                             + (" (or 'bond')" if k in ("sj_kn", "sj_ks") else ""))
     return Params(name=str(data.get("name", source)), minerals=out, joint=jrow, source=source)
 
 

@@ -29,3 +29,32 @@ def test_file_errors_name_the_field(tmp_path):
         load_params(str(p))
     with pytest.raises(InputError, match="no such parameter file"):
         load_params(str(tmp_path / "none.yaml"))
+
+
+def test_bond_like_joint_stiffness_is_resolved_at_build(tmp_path):
+    """Presets ask for sj_kn = mean(pb_emod) / (2 r_mean), sj_ks = sj_kn / 2 (not 4e9 Pa/m)."""
+    from _gbmgen_builds import small_specimen
+
+    spec = small_specimen()
+    kn = np.mean(spec.pb_emod) / (2.0 * np.mean(spec.r))
+    np.testing.assert_allclose(spec.sj_kn, [kn], rtol=1e-12)
+    np.testing.assert_allclose(spec.sj_ks, [kn / 2.0], rtol=1e-12)
+    assert 1e14 < kn < 1e15  # ~60 GPa / 0.2 mm, five orders above the tabled 4e9
+
+
+def test_calibration_files_load_and_literal_numbers_stay(tmp_path):
+    """A file in gbmsim calibrate's layout (key 'joint') is a valid --params file."""
+    from sim.protocols.parameters import save_parameters, thesis_parameters
+
+    p = tmp_path / "calibrated.yaml"
+    save_parameters(p, thesis_parameters())
+    prm = load_params(str(p))
+    assert prm.joint["sj_kn"] == 4e9 and prm.joint["sj_ks"] == 2e9
+    np.testing.assert_allclose(prm.joint_arrays()["sj_kn"], [4e9])
+    a = prm.mineral_arrays(["biotite"])
+    np.testing.assert_allclose(a["pb_ten"], [320e6])
+
+
+def test_bond_stiffness_needs_the_particles():
+    with pytest.raises(InputError, match="mean particle radius"):
+        load_params("thesis-ch4").joint_arrays()
