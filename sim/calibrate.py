@@ -26,7 +26,8 @@ The method (documented in ``docs/labtests.md``), written against a black box
    crack noise). One evaluation per iteration; the first step is the pure scaling-law step.
 4. **Seeds at the end:** the set found on one specimen is evaluated on all seeds; if the seed
    mean misses a target by more than the tolerance, one more secant step is taken on the
-   mean responses and the seeds are run again (at most ``seed_rounds`` times).
+   mean responses and the seeds are run again (at most ``seed_rounds`` times); the round
+   with the best seed mean is kept.
 
 The module runs no simulation; :mod:`sim.protocols.calibration` supplies the DEM black box.
 """
@@ -297,6 +298,7 @@ def calibrate(evaluate, params: dict, *, targets=None, knobs=DEFAULT_KNOBS, tol:
     err, u, p, resp = best
     final = _errors(resp, targets)
     seed_summary = {}
+    best_round = None
     if evaluate_seeds is not None:
         for rnd in range(max(1, seed_rounds)):
             p, resps = run(u, "seed", rnd, evaluate_seeds)
@@ -309,9 +311,14 @@ def calibrate(evaluate, params: dict, *, targets=None, knobs=DEFAULT_KNOBS, tol:
                                 "rel_error_of_mean": float(mean[i] / tvec[i] - 1.0)}
                             for i, k in enumerate(names)}
             final = {k: seed_summary[k]["rel_error_of_mean"] for k in names}
-            if max(abs(v) for v in final.values()) <= tol or rnd + 1 >= seed_rounds:
+            worst = max(abs(v) for v in final.values())
+            if best_round is None or worst < best_round[0]:
+                best_round = (worst, u.copy(), p, seed_summary, final)
+            if worst <= tol or rnd + 1 >= seed_rounds:
                 break
             u = step(u, np.log(mean / tvec))
+        # a correction round that made the seed mean worse is not kept
+        _, u, p, seed_summary, final = best_round
     converged = max(abs(v) for v in final.values()) <= accept
     mult = {k.name: float(m) for k, m in zip(knobs, np.exp(u))}
     return CalibrationResult(params=p, multipliers=mult, converged=bool(converged),

@@ -142,3 +142,18 @@ def test_report_and_parameter_file_of_a_calibration(tmp_path):
     back = load_parameters(tmp_path / "p.yaml")
     assert back["minerals"]["pyroxene"]["pb_ten"] == pytest.approx(
         res.params["minerals"]["pyroxene"]["pb_ten"], rel=1e-15)
+
+
+def test_a_worse_correction_round_is_not_kept():
+    calls = {"n": 0}
+
+    def seeds(p):
+        calls["n"] += 1
+        f = 1.03 if calls["n"] == 1 else 1.3          # the second round scatters badly
+        return [_surrogate(p, f), _surrogate(p, f)]
+
+    res = cal.calibrate(_surrogate, thesis_parameters(), tol=0.01, evaluate_seeds=seeds)
+    assert calls["n"] == 2
+    assert abs(res.final_errors["E"]) == pytest.approx(0.03, rel=0.1)   # the first round
+    assert res.seed_summary["E"]["mean"] == pytest.approx(
+        _surrogate(res.params, 1.03)["E"], rel=1e-12)
