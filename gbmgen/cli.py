@@ -99,6 +99,11 @@ def _parser():
     r.add_argument("--no-cracks", dest="cracks", action="store_false",
                    help="skip semkit's crack pipeline (grains only)")
     r.add_argument("--jobs", type=int, help="semkit worker processes")
+    r.add_argument("--test", choices=("ucs", "tension", "brazilian", "biaxial", "none"),
+                   default="ucs", help="laboratory test run on the specimen (gbmsim) [%(default)s]")
+    r.add_argument("--post-peak", type=float, default=0.8,
+                   help="stop the test when the stress falls below this fraction of the peak "
+                        "[%(default)s]")
     r.add_argument("--no-progress", action="store_true")
     _add_model_options(r)
 
@@ -264,8 +269,14 @@ def _run(a):
                   width_mm=a.width_mm, height_mm=a.height_mm,
                   tessellation=a.tessellation, fit_areas=a.fit_areas,
                   particle_radius_mm=a.particle_radius_mm, radius_ratio=a.radius_ratio,
-                  porosity=a.porosity, bond_gap_mm=a.bond_gap_mm, params=a.params)
-    print(json.dumps(summary, indent=1))
+                  porosity=a.porosity, bond_gap_mm=a.bond_gap_mm, params=a.params,
+                  test=a.test, test_options={"post_peak": a.post_peak})
+    print(json.dumps(summary, indent=1, default=str))
+    ts, ps = summary.get("test_summary") or {}, summary.get("P_sem") or {}
+    if ts.get("P_sim") and ps.get("P_pooled") is not None:
+        print(f"damage ratio P = A_T/A_S: SEM (pooled over loaded stages) {ps['P_pooled']:.2f}"
+              f"   simulated {a.test} {ts['P_sim'].get('by_area', float('nan')):.2f} (by area)",
+              file=sys.stderr)
     return 0
 
 

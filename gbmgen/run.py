@@ -1,4 +1,4 @@
-"""``gbmgen run IMAGES_DIR``: SEM images -> semkit analysis -> measured grains.csv -> specimen.
+"""``gbmgen run IMAGES_DIR``: SEM images -> semkit -> grains.csv -> specimen -> laboratory test.
 
 The end-to-end job of DESIGN.md §1 in one call. Writes to ``out``:
 
@@ -6,8 +6,12 @@ The end-to-end job of DESIGN.md §1 in one call. Writes to ``out``:
   semkit writes it) from the crack pipeline (skipped with ``cracks=False``), ``grains.csv``
   (the measured grain-size table), ``grains_per_grain.csv``, grain maps and histograms;
 * ``specimen.npz`` — built from the measured table at model scale (thesis: 10 x SEM scale);
-* ``specimen.png`` — preview; ``run.json`` — a summary (semkit tables used, specimen counts,
-  MHI target/realised, seconds per stage).
+* ``specimen.png`` — preview;
+* ``<test>/`` — the laboratory test run on the specimen by :mod:`sim.protocols` (default ``ucs``:
+  ``summary.json``, ``history.csv``, ``cracks.csv``, figures), skipped with ``test="none"``;
+* ``run.json`` — a summary (semkit tables used, specimen counts, MHI target/realised, the test's
+  E / strength / crack counts, the SEM damage ratio P beside the simulated P_sim, seconds per
+  stage).
 """
 from __future__ import annotations
 
@@ -23,10 +27,71 @@ __all__ = ["run"]
 #: Thesis minerals, brightest first in BSE images.
 DEFAULT_MINERALS = "pyroxene,plagioclase,biotite"
 
+#: Laboratory tests ``run`` can finish with (``none``: stop at the specimen).
+TESTS = ("ucs", "tension", "brazilian", "biaxial", "none")
+
+#: Summary keys of the test copied into run.json.
+_TEST_KEYS = ("E_gpa", "nu", "ucs_mpa", "ci_mpa", "cd_mpa", "tensile_mpa", "cracks", "P_sim",
+              "steps", "wall_s", "particle_steps_per_s", "stop_reason")
+
+
+def run_test(spec, test, out, *, progress=True, **options):
+    """Run the laboratory ``test`` of :mod:`sim.protocols` on ``spec``; write into ``out``.
+
+    Parameters
+    ----------
+    spec : sim.Specimen
+    test : {"ucs", "tension", "brazilian", "biaxial"}
+    out : path
+        Results folder of the test.
+    progress : bool
+    **options
+        Keywords of the protocol function (e.g. ``post_peak``, ``strain_rate``).
+
+    Returns
+    -------
+    summary : dict
+        The protocol's ``summary.json`` content.
+    """
+    if test == "ucs":
+        from sim.protocols.ucs import run_ucs as fn
+    elif test == "tension":
+        from sim.protocols.tension import run_tension as fn
+    elif test == "brazilian":
+        from sim.protocols.brazilian import run_brazilian as fn
+    elif test == "biaxial":
+        from sim.protocols.biaxial import run_biaxial as fn
+    else:
+        raise InputError(f"test = {test!r}: expected one of {', '.join(TESTS)}")
+    return fn(spec, out=str(out), progress=progress, **options).summary
+
+
+def sem_damage(sem_dir):
+    """SEM damage ratio P = A_T/A_S (Equ. 3-1) from semkit's ``damage.csv``, per stage and pooled.
+
+    Returns
+    -------
+    damage : dict
+        ``{"by_stage": [{specimen, test, stage, P_mean, P_pooled}, ...], "P_pooled": float}``
+        where ``P_pooled`` pools A_T and A_S over every loaded (not pre-test) stage; empty when
+        semkit wrote no ``damage.csv``.
+    """
+    import pandas as pd
+
+    path = pathlib.Path(sem_dir) / "damage.csv"
+    if not path.exists():
+        return {}
+    d = pd.read_csv(path)
+    loaded = d[d["stage"].astype(str) != "pre-test"]
+    a_t, a_s = float(loaded["area_T_um2"].sum()), float(loaded["area_S_um2"].sum())
+    rows = [{k: (None if pd.isna(r[k]) else r[k]) for k in
+             ("specimen", "test", "stage", "P_mean", "P_pooled")} for _, r in d.iterrows()]
+    return {"by_stage": rows, "P_pooled": a_t / a_s if a_s > 0 else None}
+
 
 def run(images_dir="sample_images", out="gbmgen_run", *, minerals=DEFAULT_MINERALS,
         classes=None, pixel_size_um=None, cracks=True, jobs=None, progress=True,
-        seed=None, **build_options):
+        seed=None, test="ucs", test_options=None, **build_options):
     """Analyse a folder of SEM images with semkit and build a specimen from the measured table.
 
     Parameters
@@ -49,6 +114,11 @@ def run(images_dir="sample_images", out="gbmgen_run", *, minerals=DEFAULT_MINERA
     progress : bool
         tqdm bars in semkit.
     seed : int, optional
+    test : {"ucs", "tension", "brazilian", "biaxial", "none"}
+        Laboratory test run on the built specimen (:func:`run_test`); ``"none"`` stops at the
+        specimen.
+    test_options : dict, optional
+        Keywords of the test's protocol function (e.g. ``{"post_peak": 0.8}``).
     **build_options
         Keywords of :func:`gbmgen.build.build_specimen` (scenario, width_mm, height_mm,
         model_scale, tessellation, particle_radius_mm, porosity, params, ...).
@@ -71,6 +141,8 @@ def run(images_dir="sample_images", out="gbmgen_run", *, minerals=DEFAULT_MINERA
     out = pathlib.Path(out)
     if not images_dir.is_dir():
         raise InputError(f"{images_dir}: not a folder of SEM images")
+    if test not in TESTS:
+        raise InputError(f"test = {test!r}: expected one of {', '.join(TESTS)}")
     sem = out / "semkit"
     sem.mkdir(parents=True, exist_ok=True)
     timing = {}
@@ -98,6 +170,12 @@ def run(images_dir="sample_images", out="gbmgen_run", *, minerals=DEFAULT_MINERA
     plot_specimen(spec, out / "specimen.png")
     timing["build"] = time.perf_counter() - t0
     timing.update({f"build_{k}": v for k, v in stages.items()})
+    test_summary = None
+    if test != "none":
+        t0 = time.perf_counter()
+        full = run_test(spec, test, out / test, progress=progress, **(test_options or {}))
+        test_summary = {k: full[k] for k in _TEST_KEYS if k in full}
+        timing[f"test_{test}"] = time.perf_counter() - t0
     summary = {
         "images": str(images_dir), "out": str(out), "grains_csv": str(table_path),
         "specimen": str(spec_path), "minerals": list(table.minerals),
@@ -110,9 +188,20 @@ def run(images_dir="sample_images", out="gbmgen_run", *, minerals=DEFAULT_MINERA
         "smooth_joints": int((spec.bond_kind == 1).sum()),
         "seed": spec.meta["seed"], "scenario": spec.meta["scenario"],
         "MHI_target": spec.meta["MHI_target"], "MHI_realised": spec.meta["MHI_realised"],
+        "test": test, "test_summary": test_summary,
+        "P_sem": sem_damage(sem) if cracks else {},
         "semkit_files": sorted(os.listdir(sem)),
         "timing_s": {k: round(v, 3) for k, v in timing.items()},
     }
-    with open(out / "run.json", "w", encoding="utf-8") as fh:
-        json.dump(summary, fh, indent=1)
+    tmp = out / "run.json.tmp"
+    with open(tmp, "w", encoding="utf-8") as fh:
+        json.dump(summary, fh, indent=1, default=_json_default)
+    os.replace(tmp, out / "run.json")
     return summary
+
+
+def _json_default(o):
+    import numpy as np
+    if isinstance(o, np.generic):
+        return o.item()
+    raise TypeError(f"{type(o).__name__} is not JSON serialisable")

@@ -18,7 +18,7 @@ def test_run_one_image(tmp_path, capsys):
     img.mkdir()
     shutil.copy(SAMPLE, img / SAMPLE.name)
     out = tmp_path / "out"
-    rc = main(["run", str(img), "--out", str(out), "--no-cracks", "--no-progress",
+    rc = main(["run", str(img), "--out", str(out), "--no-cracks", "--no-progress", "--test", "none",
                "--pixel-size-um", "1.43", "--width-mm", "5", "--height-mm", "10", "--seed", "2"])
     assert rc == 0
     summary = json.loads(capsys.readouterr().out)
@@ -36,3 +36,33 @@ def test_run_one_image(tmp_path, capsys):
 def test_run_missing_folder(tmp_path, capsys):
     assert main(["run", str(tmp_path / "none"), "--out", str(tmp_path / "o")]) == 2
     assert "not a folder" in capsys.readouterr().err
+
+
+@pytest.mark.skipif(not SAMPLE.exists(), reason="sample_images not present")
+def test_run_whole_chain_sets_sem_p_beside_simulated_p(tmp_path, capsys):
+    """Images with a manifest -> cracks, P, grains.csv -> specimen -> UCS -> P_sem beside P_sim."""
+    img = tmp_path / "images"
+    img.mkdir()
+    names = ["S1_pre_01.png", "S1_fail_01.png"]
+    for n in names:
+        shutil.copy(SAMPLE.parent / n, img / n)
+    man = (SAMPLE.parent / "manifest.csv").read_text().splitlines()
+    (img / "manifest.csv").write_text("\n".join([man[0]] + [ln for ln in man[1:]
+                                                            if ln.split(",")[0] in names]) + "\n")
+    out = tmp_path / "out"
+    rc = main(["run", str(img), "--out", str(out), "--no-progress", "--seed", "3", "--jobs", "1",
+               "--width-mm", "3", "--height-mm", "6", "--post-peak", "0.9"])
+    assert rc == 0
+    run = json.loads((out / "run.json").read_text())
+    ts = run["test_summary"]
+    # a bonded granite-like specimen: stiff and strong, cracks logged by kind
+    assert 20 < ts["E_gpa"] < 200 and 30 < ts["ucs_mpa"] < 500
+    assert ts["stop_reason"] == "post_peak" and ts["cracks"]["total"] > 0
+    ucs = json.loads((out / "ucs" / "summary.json").read_text())
+    assert ucs["ucs_mpa"] == pytest.approx(ts["ucs_mpa"])
+    # the SEM damage ratio of the loaded image, pooled, equals semkit's damage.csv row
+    import pandas as pd
+    d = pd.read_csv(out / "semkit" / "damage.csv")
+    failure = d[d["stage"] == "failure"].iloc[0]
+    assert run["P_sem"]["P_pooled"] == pytest.approx(failure["area_T_um2"] / failure["area_S_um2"])
+    assert "simulated ucs" in capsys.readouterr().err
