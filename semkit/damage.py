@@ -18,11 +18,12 @@ import numpy as np
 import pandas as pd
 
 from . import config
+from .damage_areas import darkness_fraction, typed_areas
 from .errors import InputError
 from .indices import damage_ratio
 
-__all__ = ["p_status", "image_damage", "typed_areas", "darkness_fraction", "flag_outliers", "damage_table", "plot_p_by_stage",
-           "STAGE_ORDER", "OUTLIER_Z", "OUTLIER_MIN_N"]
+__all__ = ["p_status", "image_damage", "typed_areas", "darkness_fraction", "flag_outliers",
+           "damage_table", "plot_p_by_stage", "STAGE_ORDER", "OUTLIER_Z", "OUTLIER_MIN_N"]
 
 #: Order of the loading stages on the P-by-stage plot and in ``damage.csv``.
 STAGE_ORDER = config.STAGE_ORDER
@@ -30,10 +31,6 @@ STAGE_ORDER = config.STAGE_ORDER
 OUTLIER_Z = config.OUTLIER_Z
 #: Fewest finite P values in a test for the outlier rule to apply.
 OUTLIER_MIN_N = config.OUTLIER_MIN_N
-#: band (px) around the crack objects over which partial-volume darkness is summed.
-PV_BAND_PX = config.PV_BAND_PX
-#: Gaussian sigma (px) of the local-background estimate for the partial-volume area.
-PV_BACKGROUND_SIGMA_PX = config.PV_BACKGROUND_SIGMA_PX
 #: ``mixed`` crack handling in A_T / A_S.
 MIXED_MODES = ("exclude", "split", "tensile", "shear")
 
@@ -134,102 +131,6 @@ def image_damage(cracks, *, mixed="exclude", area_column=None):
     out["P"] = damage_ratio(out["area_T_um2"].to_numpy(), out["area_S_um2"].to_numpy())
     out["P_status"] = p_status(out["area_T_um2"], out["area_S_um2"])
     return out
-
-
-def darkness_fraction(image, crack_labels, *, core=None, band_px=PV_BAND_PX,
-                      background_sigma_px=PV_BACKGROUND_SIGMA_PX):
-    """Partial-volume darkness of each pixel near the cracks (0 background .. 1 crack core).
-
-    Parameters
-    ----------
-    image : (M, N) ndarray
-    crack_labels : (M, N) ndarray of int
-    core : float, optional
-        Grey level of a fully dark crack pixel; default the 2nd percentile inside the objects.
-    band_px, background_sigma_px : float
-        See :func:`typed_areas`.
-
-    Returns
-    -------
-    f : (M, N) ndarray of float64
-        clip((B - I) / (B - I_core), 0, 1) within ``band_px`` of an object, else 0.
-    nearest : tuple of two (M, N) ndarrays of int
-        Row and column of the nearest object pixel (for ownership).
-    """
-    from scipy import ndimage as ndi
-    img = np.asarray(image, dtype=np.float64)
-    obj = np.asarray(crack_labels) > 0
-    dist, (ir, ic) = ndi.distance_transform_edt(~obj, return_indices=True)
-    region = dist <= band_px
-    bg_mask = dist > band_px + 1
-    num = ndi.gaussian_filter(np.where(bg_mask, img, 0.0), background_sigma_px)
-    den = ndi.gaussian_filter(bg_mask.astype(np.float64), background_sigma_px)
-    fill = np.median(img[bg_mask]) if bg_mask.any() else img.max()
-    bg = np.where(den > 1e-3, num / np.maximum(den, 1e-3), fill)
-    if core is None:
-        core = float(np.percentile(img[obj], 2)) if obj.any() else float(img.min())
-    f = np.clip((bg - img) / np.maximum(bg - float(core), 1e-6), 0.0, 1.0)
-    f[~region] = 0.0
-    return f, (ir, ic)
-
-
-def typed_areas(image, crack_labels, type_image=None, *, core=None, band_px=PV_BAND_PX,
-                background_sigma_px=PV_BACKGROUND_SIGMA_PX):
-    """Partial-volume crack areas per object, split by post-test type.
-
-    Thin cracks (1-2 px, typical of shear) lose about half their area to any pixel threshold
-    once blurred; the partial-volume area sums each pixel's darkness fraction instead, which
-    is unbiased for thin and wide cracks alike.
-
-    Parameters
-    ----------
-    image : (M, N) ndarray
-        Grey image, cracks dark (flattened if the lighting is uneven).
-    crack_labels : (M, N) ndarray of int
-        Crack objects 1..n.
-    type_image : (M, N) ndarray of int, optional
-        Type per pixel (1 tensile, 2 shear, 3 mixed; :func:`semkit.classify.classify_post`).
-    core : float, optional
-        Grey level of a fully dark crack pixel; default the 2nd percentile inside the objects.
-    band_px : int
-        Pixels within this distance of an object count (blur spreads darkness beyond it).
-    background_sigma_px : float
-        Scale of the local background (normalised convolution over non-crack pixels).
-
-    Returns
-    -------
-    table : pandas.DataFrame
-        ``crack_id, area_pv_px, area_T_px, area_S_px, area_M_px``.
-
-    Notes
-    -----
-    f = clip((B - I) / (B - I_core), 0, 1) with B the local background; area = sum f over the
-    object and its band (band pixels belong to the nearest object and take its pixel type).
-    """
-    img = np.asarray(image, dtype=np.float64)
-    lab = np.asarray(crack_labels)
-    if img.shape != lab.shape or img.ndim != 2:
-        raise InputError(f"crack_labels: expected shape {img.shape}, got {lab.shape}")
-    from scipy import ndimage as ndi
-    n = int(lab.max())
-    cols = ["crack_id", "area_pv_px", "area_T_px", "area_S_px", "area_M_px"]
-    if n == 0:
-        return pd.DataFrame(columns=cols)
-    obj = lab > 0
-    f, (ir, ic) = darkness_fraction(img, lab, core=core, band_px=band_px,
-                                    background_sigma_px=background_sigma_px)
-    owner = lab[ir, ic]
-    types = np.zeros(lab.shape, np.int64) if type_image is None else \
-        np.asarray(type_image).astype(np.int64)[ir, ic]
-    out = {"crack_id": np.arange(1, n + 1),
-           "area_pv_px": np.bincount(owner.ravel(), f.ravel(), minlength=n + 1)[1:]}
-    for k, name in ((1, "area_T_px"), (2, "area_S_px"), (3, "area_M_px")):
-        w = np.where(types == k, f, 0.0)
-        out[name] = np.bincount(owner.ravel(), w.ravel(), minlength=n + 1)[1:]
-    t = pd.DataFrame(out)
-    present = np.zeros(n + 1, bool)
-    present[lab[obj]] = True
-    return t[present[1:]].reset_index(drop=True)
 
 
 def flag_outliers(values, *, z=OUTLIER_Z, min_n=OUTLIER_MIN_N):
@@ -392,136 +293,9 @@ def plot_p_by_stage(damage, path=None, *, ax=None):
     return fig
 
 
-# ----------------------------------------------------------------------------- pipeline glue
-def science_stage(analysis, cracks, row, *, manifest_row=None, overlay_dir=None):
-    """Run the issue-#3 stages on one analysed image (called by the pipeline).
-
-    Parameters
-    ----------
-    analysis : semkit.pipeline.CrackAnalysis
-        The analysed image; its options say which stages run (``classify``, ``crack_model``,
-        ``grains``, ``minerals``).
-    cracks : pandas.DataFrame
-        Its ``cracks.csv`` rows.
-    row : dict
-        Its ``images.csv`` row; ``area_T_um2, area_S_um2, area_M_um2, P, P_status`` are set.
-    manifest_row : dict, optional
-        Its ``manifest.csv`` row: stage ``pre-test`` means no post-test typing (P undefined,
-        status ``pre-test``).
-    overlay_dir : path, optional
-        Where the grain map PNG goes (``<name>_grains.png``) when grains are measured.
-
-    Returns
-    -------
-    cracks : pandas.DataFrame
-        With types, confidences, features, ``area_pv_um2``; ``cracks.attrs["grains"]`` holds
-        the per-grain table (as a dict of columns) when grains were measured.
-    row : dict
-    """
-    from .classify import classify_stage, load_model
-    opts = analysis.options
-    stage = None if manifest_row is None else manifest_row.get("stage")
-    stage = None if stage is None or (isinstance(stage, float) and np.isnan(stage)) else str(stage)
-    post = bool(getattr(opts, "classify", True)) and stage != "pre-test"
-    model = load_model(opts.crack_model) if getattr(opts, "crack_model", None) else None
-    grain_labels = None
-    grains_df = None
-    if getattr(opts, "grains", False):
-        from .grains import grains_stage, parse_minerals, plot_grain_map
-        names, n = parse_minerals(getattr(opts, "minerals", None))
-        grain_labels, ph, grains_df = grains_stage(
-            analysis.flat, mask=analysis.object_mask, pixel_size_um=analysis.pixel_size_um,
-            names=names, n_phases=n, alt_image=analysis.image)
-        grains_df.insert(0, "image", analysis.name)
-        if overlay_dir is not None:
-            import pathlib
-
-            import matplotlib.pyplot as plt
-            pathlib.Path(overlay_dir).mkdir(parents=True, exist_ok=True)
-            stem = pathlib.Path(analysis.name).stem
-            plt.close(plot_grain_map(grain_labels, ph,
-                                     pathlib.Path(overlay_dir) / f"{stem}_grains.png"))
-    if not (post or grain_labels is not None):
-        row = dict(row)
-        row.update(area_T_um2=np.nan, area_S_um2=np.nan, area_M_um2=np.nan, P=np.nan,
-                   P_status="pre-test" if stage == "pre-test" else "not_classified")
-        return cracks, row
-    out = classify_stage(cracks, analysis.crack_labels, grey=analysis.smooth,
-                         pixel_size_um=analysis.pixel_size_um, model=model, post=post,
-                         grain_labels=grain_labels)
-    if grains_df is not None:  # a plain dict: DataFrame attrs must stay comparable
-        out.attrs["grains"] = grains_df.to_dict("list")
-    row = dict(row)
-    if post and len(out):
-        d = image_damage(out.assign(image=analysis.name)).iloc[0]
-        row.update(area_T_um2=float(d.area_T_um2), area_S_um2=float(d.area_S_um2),
-                   area_M_um2=float(d.area_mixed_um2), P=float(d.P), P_status=d.P_status)
-    else:
-        row.update(area_T_um2=0.0, area_S_um2=0.0, area_M_um2=0.0, P=np.nan,
-                   P_status="pre-test" if stage == "pre-test" else "no_cracks")
-    return out, row
-
-
-def write_science_outputs(out, images, cracks, *, manifest=None, labels=None, grain_tables=(),
-                          classes=None):
-    """Folder-level outputs: user labels, ``damage.csv``, ``P_by_stage.png``, ``grains.csv``.
-
-    Parameters
-    ----------
-    out : path
-        Output folder of ``semkit analyse``.
-    images, cracks : pandas.DataFrame
-        The folder's ``images.csv`` and ``cracks.csv`` tables.
-    manifest : pandas.DataFrame, optional
-        ``manifest.csv``; with ``specimen, test, stage`` it gives ``damage.csv``.
-    labels : pandas.DataFrame, optional
-        User labels (``image, crack_id, type``): override the types and recompute P.
-    grain_tables : sequence of pandas.DataFrame or dict of columns
-        Per-image grain tables (``--grains``).
-    classes : str, optional
-        ``--classes`` value for ``grains.csv``.
-
-    Returns
-    -------
-    images, cracks : pandas.DataFrame
-        The (possibly relabelled) tables, rewritten atomically when changed.
-    """
-    import pathlib
-
-    from .io import write_csv_atomic
-    out = pathlib.Path(out)
-    if labels is not None and len(cracks) and "type_post" in cracks.columns:
-        from .classify import apply_labels
-        cracks = apply_labels(cracks, labels)
-        if "frac_tensile" in cracks.columns:
-            d = image_damage(cracks[cracks["image"].isin(labels["image"])]).set_index("image")
-            images = images.copy()
-            for name, r in d.iterrows():
-                sel = images["image"] == name
-                images.loc[sel, ["area_T_um2", "area_S_um2", "P"]] = \
-                    [r.area_T_um2, r.area_S_um2, r.P]
-                images.loc[sel, "P_status"] = r.P_status
-        write_csv_atomic(images, out / "images.csv")
-        write_csv_atomic(cracks, out / "cracks.csv")
-    if manifest is not None and {"specimen", "test", "stage"} <= set(manifest.columns) \
-            and "P" in images.columns and len(images):
-        ok = images[images["image"].isin(manifest["image"].astype(str))]
-        if len(ok):
-            flagged, dmg = damage_table(ok, manifest)
-            write_csv_atomic(dmg, out / "damage.csv")
-            if "P_outlier" in flagged.columns:
-                images = images.drop(columns=["P_outlier"], errors="ignore").merge(
-                    flagged[["image", "P_outlier"]], on="image", how="left")
-                write_csv_atomic(images, out / "images.csv")
-            import matplotlib.pyplot as plt
-            plt.close(plot_p_by_stage(dmg, out / "P_by_stage.png"))
-    tables = [pd.DataFrame(t) for t in grain_tables if t is not None]
-    tables = [t for t in tables if len(t)]
-    if tables:
-        from .grains import grain_size_table, plot_grain_histograms
-        allg = pd.concat(tables, ignore_index=True)
-        write_csv_atomic(allg, out / "grains_per_grain.csv")
-        write_csv_atomic(grain_size_table(allg, classes=classes), out / "grains.csv")
-        import matplotlib.pyplot as plt
-        plt.close(plot_grain_histograms(allg, out / "grain_histograms.png"))
-    return images, cracks
+def __getattr__(name):
+    """The pipeline's entry points live in ``semkit.damage_stage`` (imported on first use)."""
+    if name in ("science_stage", "write_science_outputs"):
+        from . import damage_stage
+        return getattr(damage_stage, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
