@@ -100,10 +100,8 @@ WINDOW_PX = 10
 LINK_PX = 8
 #: objects with fewer pixels than this are "small" (debris, fragments).
 SMALL_OBJECT_PX = 40
-#: a trace is mixed when its long tensile runs and its long shear runs each make up at least
-#: this share of its skeleton (runs of the smoothed per-pixel decision, >= MIN_RUN_PX long).
-MIXED_SHARE = 0.2
-#: running-mean window (px) along a branch before runs are measured.
+#: running-mean window (px) along a branch before runs are measured (and of the per-pixel
+#: decision of traces too short for the trace model).
 RUN_SMOOTH_PX = 15
 #: shortest run (px) of one type that counts as a segment of a mixed crack.
 MIN_RUN_PX = 25
