@@ -15,6 +15,38 @@ import os
 import time
 
 
+def _probe(spec, a):
+    """Time ``a.probe_steps`` steps of the UCS set-up and extrapolate the full run."""
+    from sim.protocols import loading as ld
+    factor = a.timestep_factor or ld.DEFAULT_TIMESTEP_FACTOR
+    v = a.platen_velocity or ld.DEFAULT_PLATEN_VELOCITY
+    spec, _ = ld.relieve_overlaps(spec)
+    t0 = time.perf_counter()
+    sim = ld.make_simulation(spec, timestep_factor=factor)
+    lo, hi = ld.add_platens(sim, spec.box)
+    setup = time.perf_counter() - t0
+    sim.set_wall_velocity(lo, 0.0, v)
+    sim.set_wall_velocity(hi, 0.0, -v)
+    sim.cycle(200)                       # compile / warm caches
+    t0 = time.perf_counter()
+    sim.cycle(a.probe_steps)
+    wall = time.perf_counter() - t0
+    pps = spec.n_particles * a.probe_steps / wall
+    rate = 2.0 * v / (spec.box[3] - spec.box[2])
+    steps = a.stop_strain / (rate * sim.dt)
+    res = {"n_particles": spec.n_particles, "probe_steps": a.probe_steps, "probe_wall_s": wall,
+           "setup_s": setup, "dt_s": sim.dt, "particle_steps_per_s": pps,
+           "platen_velocity_m_per_s": v, "timestep_factor": factor,
+           "stop_strain_assumed": a.stop_strain, "steps_needed_estimate": steps,
+           "full_run_wall_s_estimate": steps * spec.n_particles / pps,
+           "note": "2-core machine shared with other engineers' jobs (load ~5) during the probe"}
+    os.makedirs(a.out, exist_ok=True)
+    with open(os.path.join(a.out, "ucs_thesis_scale.json"), "w") as f:
+        json.dump(res, f, indent=2)
+    print(json.dumps(res, indent=2))
+    return 0
+
+
 def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--specimen", default=None, help="default: built with gbmgen (seed 1)")
@@ -24,6 +56,9 @@ def main(argv=None):
                    help="axial strain at the 80 %% post-peak stop, for the extrapolation")
     p.add_argument("--platen-velocity", type=float, default=None)
     p.add_argument("--timestep-factor", type=float, default=None)
+    p.add_argument("--probe-steps", type=int, default=0,
+                   help="only time this many loading steps (platens moving) and extrapolate "
+                        "the full run from the steps it needs at the default speed")
     p.add_argument("--out", default="benchmarks/results")
     a = p.parse_args(argv)
     from sim import Specimen
@@ -47,6 +82,8 @@ def main(argv=None):
         kw["timestep_factor"] = a.timestep_factor
     if a.max_strain:
         kw.update(max_strain=a.max_strain, post_peak=None)
+    if a.probe_steps:
+        return _probe(spec, a)
     t0 = time.perf_counter()
     r = run_ucs(spec, progress=True, **kw)
     wall = time.perf_counter() - t0
