@@ -190,6 +190,26 @@ def particle_range(lo, hi, nrows, dt, alpha, step_lim, x, y, vx, vy, w, fx, fy, 
 
 
 @njit
+def particles_chunk(lo, hi, nrows, dt, alpha, step_lim, x, y, vx, vy, w, fx, fy, fm, r, invm,
+                    invi, x0, y0, fvx, fvy, fw, fix, acc, kin, sleep, sleep_d, sleep_ratio,
+                    sleep_steps, quiet):
+    """:func:`particle_range` with the number of buffer rows as a compile-time constant for 1
+    and 2 rows (the usual thread counts), so the row sum is unrolled: with ``nrows`` known
+    only at run time the pass cost 12 instead of 7 ns per particle (20k, one thread)."""
+    if nrows == 1:
+        return particle_range(lo, hi, 1, dt, alpha, step_lim, x, y, vx, vy, w, fx, fy, fm, r,
+                              invm, invi, x0, y0, fvx, fvy, fw, fix, acc, kin, sleep, sleep_d,
+                              sleep_ratio, sleep_steps, quiet)
+    if nrows == 2:
+        return particle_range(lo, hi, 2, dt, alpha, step_lim, x, y, vx, vy, w, fx, fy, fm, r,
+                              invm, invi, x0, y0, fvx, fvy, fw, fix, acc, kin, sleep, sleep_d,
+                              sleep_ratio, sleep_steps, quiet)
+    return particle_range(lo, hi, nrows, dt, alpha, step_lim, x, y, vx, vy, w, fx, fy, fm, r,
+                          invm, invi, x0, y0, fvx, fvy, fw, fix, acc, kin, sleep, sleep_d,
+                          sleep_ratio, sleep_steps, quiet)
+
+
+@njit
 def gather_range(lo, hi, nrows, fx, fy, fm, acc):
     """Sum the force buffers of particles ``lo:hi`` into fx, fy, fm and leave the sum in row 0
     (canonical form: the other rows zero), without moving anything."""
@@ -365,7 +385,7 @@ def run_steps(nsteps, step0, dt, alpha, nchunks, skin, step_lim, overlap_lim, t,
             for c in prange(nchunks):
                 lo = (n * c) // nchunks
                 hi = (n * (c + 1)) // nchunks
-                dres[c], kres[c], wres[c] = particle_range(
+                dres[c], kres[c], wres[c] = particles_chunk(
                     lo, hi, nchunks, dt, alpha, step_lim, x, y, vx, vy, w, pf[FX], pf[FY],
                     pf[FM], r, pf[INVM], pf[INVI], pf[X0], pf[Y0], pf[FVX], pf[FVY], pf[FW],
                     fix, acc, kin, sleep, sleep_d, sleep_ratio, sleep_steps, quiet)
