@@ -140,7 +140,8 @@ def run_test_command(args) -> int:
         return 2
     s = res.summary
     keys = ("E_gpa", "nu", "ucs_mpa", "ci_mpa", "cd_mpa", "tensile_mpa", "steps", "wall_s")
-    print(json.dumps({k: s[k] for k in keys if k in s}))
+    from .outputs import json_ready
+    print(json.dumps(json_ready({k: s[k] for k in keys if k in s})))
     return 0
 
 
@@ -163,8 +164,10 @@ def run_calibrate_command(args) -> int:
     except (InputError, ValueError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
-    print(json.dumps({"converged": res.converged, "final_errors": res.final_errors,
-                      "n_evaluations": res.n_evaluations, "wall_s": round(res.wall_s, 1)}))
+    from .outputs import json_ready
+    print(json.dumps(json_ready({"converged": res.converged, "final_errors": res.final_errors,
+                      "n_evaluations": res.n_evaluations,
+                      "wall_s": round(res.wall_s, 1)})))
     return 0 if res.converged else 1
 
 
