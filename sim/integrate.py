@@ -76,14 +76,15 @@ from .walls import wall_forces, wall_motion
 
 
 @njit
-def particle_range(lo, hi, nrows, dt, alpha, step_lim, x, y, vx, vy, w, fx, fy, fm, r, invm,
-                   invi, x0, y0, fvx, fvy, fw, fix, acc, kin, sleep, sleep_d, sleep_ratio,
-                   sleep_steps, quiet):
+def particle_range(lo, hi, nrows, dt, alpha, step_lim, fx, fy, fm, invm, invi, x0, y0, fvx, fvy,
+                   fw, fix, acc, kin, sleep, sleep_d, sleep_ratio, sleep_steps, quiet):
     """Sum the force buffers, damp and integrate particles ``lo:hi``.
 
     Reads and zeroes ``acc[:nrows, 4p:4p+4]``; writes fx, fy, fm (the unbalanced contact
-    force and moment), v^{n+1/2}, w and x^{n+1}, and copies x, y, vx, vy, w into the packed
-    ``kin[8p:8p+5]`` that the pair passes read (one cache line per particle).
+    force and moment) and integrates in the packed ``kin[8p:8p+7]`` = (x, y, vx, vy, w, r,
+    asleep), one cache line per particle, which the pair passes read. During a
+    :func:`run_steps` call ``kin`` is the only copy of x, y, vx, vy, w that moves; the
+    particle table rows are written back when the call returns (:func:`sync_range`).
 
     With ``sleep``: a free particle that moved less than ``sleep_d`` per step with an unbalanced
     force below ``sleep_ratio`` × the sum of its pair-force magnitudes for ``sleep_steps``
@@ -125,64 +126,62 @@ def particle_range(lo, hi, nrows, dt, alpha, step_lim, x, y, vx, vy, w, fx, fy, 
         fx[p] = sx
         fy[p] = sy
         fm[p] = sm
+        k = 8 * p
         f = fix[p]
         if sleep and f & 8:
             if s3 > 0.0:
                 # woken: integrate from the next step, once all its pairs are summed again
                 fix[p] = f & ~8
                 quiet[p] = 0
-                kin[8 * p + 6] = 0.0
+                kin[k + 6] = 0.0
             continue
         if f & 1:
-            vx[p] = fvx[p]
+            vxn = fvx[p]
         else:
-            u = vx[p]
+            u = kin[k + 2]
             d = local_damping(sx, u, alpha)
-            vx[p] = u + (sx + d) * invm[p] * dt
-            work += 0.5 * dt * d * (u + vx[p])
+            vxn = u + (sx + d) * invm[p] * dt
+            work += 0.5 * dt * d * (u + vxn)
         if f & 2:
-            vy[p] = fvy[p]
+            vyn = fvy[p]
         else:
-            u = vy[p]
+            u = kin[k + 3]
             d = local_damping(sy, u, alpha)
-            vy[p] = u + (sy + d) * invm[p] * dt
-            work += 0.5 * dt * d * (u + vy[p])
+            vyn = u + (sy + d) * invm[p] * dt
+            work += 0.5 * dt * d * (u + vyn)
         if f & 4:
-            w[p] = fw[p]
+            wn = fw[p]
         else:
-            u = w[p]
+            u = kin[k + 4]
             d = local_damping(sm, u, alpha)
-            w[p] = u + (sm + d) * invi[p] * dt
-            work += 0.5 * dt * d * (u + w[p])
-        ux = vx[p] * dt
-        uy = vy[p] * dt
-        x[p] += ux
-        y[p] += uy
-        k = 8 * p
-        kin[k] = x[p]
-        kin[k + 1] = y[p]
-        kin[k + 2] = vx[p]
-        kin[k + 3] = vy[p]
-        kin[k + 4] = w[p]
-        if not (abs(ux) + abs(uy) <= step_lim * r[p]) and bad < 0:
+            wn = u + (sm + d) * invi[p] * dt
+            work += 0.5 * dt * d * (u + wn)
+        ux = vxn * dt
+        uy = vyn * dt
+        xn = kin[k] + ux
+        yn = kin[k + 1] + uy
+        rp = kin[k + 5]
+        if not (abs(ux) + abs(uy) <= step_lim * rp) and bad < 0:
             bad = p
         if sleep and f == 0:
-            if (abs(ux) + abs(uy) + abs(w[p]) * r[p] * dt < sleep_d
+            if (abs(ux) + abs(uy) + abs(wn) * rp * dt < sleep_d
                     and abs(sx) + abs(sy) <= sleep_ratio * s3):
                 quiet[p] += 1
                 if quiet[p] >= sleep_steps:
                     fix[p] = 8
-                    vx[p] = 0.0
-                    vy[p] = 0.0
-                    w[p] = 0.0
-                    kin[k + 2] = 0.0
-                    kin[k + 3] = 0.0
-                    kin[k + 4] = 0.0
+                    vxn = 0.0
+                    vyn = 0.0
+                    wn = 0.0
                     kin[k + 6] = 1.0
             else:
                 quiet[p] = 0
-        ex = x[p] - x0[p]
-        ey = y[p] - y0[p]
+        kin[k] = xn
+        kin[k + 1] = yn
+        kin[k + 2] = vxn
+        kin[k + 3] = vyn
+        kin[k + 4] = wn
+        ex = xn - x0[p]
+        ey = yn - y0[p]
         d2 = ex * ex + ey * ey
         if d2 > maxd2:
             maxd2 = d2
@@ -190,21 +189,32 @@ def particle_range(lo, hi, nrows, dt, alpha, step_lim, x, y, vx, vy, w, fx, fy, 
 
 
 @njit
-def particles_chunk(lo, hi, nrows, dt, alpha, step_lim, x, y, vx, vy, w, fx, fy, fm, r, invm,
-                    invi, x0, y0, fvx, fvy, fw, fix, acc, kin, sleep, sleep_d, sleep_ratio,
-                    sleep_steps, quiet):
+def sync_range(lo, hi, x, y, vx, vy, w, kin):
+    """Copy the packed kinematics of particles ``lo:hi`` back to the particle table rows."""
+    for p in range(lo, hi):
+        k = 8 * p
+        x[p] = kin[k]
+        y[p] = kin[k + 1]
+        vx[p] = kin[k + 2]
+        vy[p] = kin[k + 3]
+        w[p] = kin[k + 4]
+
+
+@njit
+def particles_chunk(lo, hi, nrows, dt, alpha, step_lim, fx, fy, fm, invm, invi, x0, y0, fvx,
+                    fvy, fw, fix, acc, kin, sleep, sleep_d, sleep_ratio, sleep_steps, quiet):
     """:func:`particle_range` with the number of buffer rows as a compile-time constant for 1
     and 2 rows (the usual thread counts), so the row sum is unrolled: with ``nrows`` known
     only at run time the pass cost 12 instead of 7 ns per particle (20k, one thread)."""
     if nrows == 1:
-        return particle_range(lo, hi, 1, dt, alpha, step_lim, x, y, vx, vy, w, fx, fy, fm, r,
+        return particle_range(lo, hi, 1, dt, alpha, step_lim, fx, fy, fm,
                               invm, invi, x0, y0, fvx, fvy, fw, fix, acc, kin, sleep, sleep_d,
                               sleep_ratio, sleep_steps, quiet)
     if nrows == 2:
-        return particle_range(lo, hi, 2, dt, alpha, step_lim, x, y, vx, vy, w, fx, fy, fm, r,
+        return particle_range(lo, hi, 2, dt, alpha, step_lim, fx, fy, fm,
                               invm, invi, x0, y0, fvx, fvy, fw, fix, acc, kin, sleep, sleep_d,
                               sleep_ratio, sleep_steps, quiet)
-    return particle_range(lo, hi, nrows, dt, alpha, step_lim, x, y, vx, vy, w, fx, fy, fm, r,
+    return particle_range(lo, hi, nrows, dt, alpha, step_lim, fx, fy, fm,
                           invm, invi, x0, y0, fvx, fvy, fw, fix, acc, kin, sleep, sleep_d,
                           sleep_ratio, sleep_steps, quiet)
 
@@ -373,6 +383,12 @@ def run_steps(nsteps, step0, dt, alpha, nchunks, skin, step_lim, overlap_lim, t,
             kin[k + 4] = w[p]
             kin[k + 5] = r[p]
             kin[k + 6] = 1.0 if fix[p] & 8 else 0.0
+    # strided views of the packed kinematics for the (serial) wall pass
+    kx = kin[0::8]
+    ky = kin[1::8]
+    kvx = kin[2::8]
+    kvy = kin[3::8]
+    kw = kin[4::8]
     if refresh:
         acc[:, :] = 0.0
     s = -1 if refresh else 0
@@ -386,9 +402,9 @@ def run_steps(nsteps, step0, dt, alpha, nchunks, skin, step_lim, overlap_lim, t,
                 lo = (n * c) // nchunks
                 hi = (n * (c + 1)) // nchunks
                 dres[c], kres[c], wres[c] = particles_chunk(
-                    lo, hi, nchunks, dt, alpha, step_lim, x, y, vx, vy, w, pf[FX], pf[FY],
-                    pf[FM], r, pf[INVM], pf[INVI], pf[X0], pf[Y0], pf[FVX], pf[FVY], pf[FW],
-                    fix, acc, kin, sleep, sleep_d, sleep_ratio, sleep_steps, quiet)
+                    lo, hi, nchunks, dt, alpha, step_lim, pf[FX], pf[FY], pf[FM], pf[INVM],
+                    pf[INVI], pf[X0], pf[Y0], pf[FVX], pf[FVY], pf[FW], fix, acc, kin, sleep,
+                    sleep_d, sleep_ratio, sleep_steps, quiet)
             maxd2 = 0.0
             bad = -1
             for c in range(nchunks):
@@ -398,6 +414,7 @@ def run_steps(nsteps, step0, dt, alpha, nchunks, skin, step_lim, overlap_lim, t,
                 if bad < 0 and kres[c] >= 0:
                     bad = kres[c]
             if bad >= 0:
+                sync_range(0, n, x, y, vx, vy, w, kin)
                 info[1] = 1.0 if (vx[bad] != vx[bad] or vy[bad] != vy[bad] or w[bad] != w[bad]
                                   or x[bad] != x[bad] or y[bad] != y[bad]) else 2.0
                 info[2] = bad
@@ -421,17 +438,19 @@ def run_steps(nsteps, step0, dt, alpha, nchunks, skin, step_lim, overlap_lim, t,
         wworst = 0.0
         qworst = -1
         if has_walls:
-            wworst, qworst = wall_forces(dti, x, y, vx, vy, w, r, acc[0], wf, qp, qw, nq,
+            wworst, qworst = wall_forces(dti, kx, ky, kvx, kvy, kw, r, acc[0], wf, qp, qw, nq,
                                          qf[Q_FS], qf[Q_KN], qf[Q_KS], qf[Q_MU], qf[Q_FN],
                                          kin, sleep, sleep_d)
         info[4] = max(worst, wworst)
         if worst > overlap_lim:
             info[1] = 3.0 if kworst >= 0 else 5.0
             info[2] = kworst if kworst >= 0 else -kworst - 2
+            sync_range(0, n, x, y, vx, vy, w, kin)
             return s + 1, 2
         if wworst > overlap_lim:
             info[1] = 4.0
             info[2] = qworst
+            sync_range(0, n, x, y, vx, vy, w, kin)
             return s + 1, 2
         status = 0
         if moving:
@@ -453,6 +472,7 @@ def run_steps(nsteps, step0, dt, alpha, nchunks, skin, step_lim, overlap_lim, t,
                 lo = (n * c) // nchunks
                 hi = (n * (c + 1)) // nchunks
                 gather_range(lo, hi, nchunks, pf[FX], pf[FY], pf[FM], acc)
+                sync_range(lo, hi, x, y, vx, vy, w, kin)
             if status == 1:
                 return s, 1
     return nsteps, 0
