@@ -127,22 +127,11 @@ def _dist_to_polygon(px, py, xy, a, b):
     m = b - a
     best = np.inf
     for v in range(m):
-        x1 = xy[a + v, 0]
-        y1 = xy[a + v, 1]
-        x2 = xy[a + (v + 1) % m, 0]
-        y2 = xy[a + (v + 1) % m, 1]
-        ex = x2 - x1
-        ey = y2 - y1
-        ll = ex * ex + ey * ey
-        t = 0.0
-        if ll > 0:
-            t = min(max(((px - x1) * ex + (py - y1) * ey) / ll, 0.0), 1.0)
-        dx = x1 + t * ex - px
-        dy = y1 + t * ey - py
-        d = dx * dx + dy * dy
+        w = a + (v + 1) % m
+        d = _seg_dist(px, py, xy[a + v, 0], xy[a + v, 1], xy[w, 0], xy[w, 1])
         if d < best:
             best = d
-    return np.sqrt(best)
+    return best
 
 
 @njit
