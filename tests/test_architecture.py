@@ -37,13 +37,30 @@ def test_forbidden_import_is_detected(tmp_path):
     assert "gbmgen" in set(_imports(f))
 
 
+_NO_WORK = """
+import importlib, pkgutil, sys
+import numba.core.registry  # noqa: F401
+from numba.core.dispatcher import Dispatcher
+pkg = importlib.import_module("{pkg}")
+assert "matplotlib" not in sys.modules, "importing {pkg} imported matplotlib"
+for info in pkgutil.walk_packages(pkg.__path__, "{pkg}."):
+    if not info.name.endswith("__main__"):
+        importlib.import_module(info.name)
+compiled = [f"{{name}}.{{k}}" for name, mod in list(sys.modules.items())
+            if name.split(".")[0] == "{pkg}"
+            for k, v in vars(mod).items() if isinstance(v, Dispatcher) and v.overloads]
+dispatchers = [k for name, mod in list(sys.modules.items()) if name.split(".")[0] == "{pkg}"
+               for k, v in vars(mod).items() if isinstance(v, Dispatcher)]
+assert not compiled, "compiled at import: " + ", ".join(compiled)
+print(len(dispatchers))
+"""
+
+
 @pytest.mark.parametrize("pkg", sorted(ALLOWED))
 def test_import_does_no_work(pkg):
-    """Importing a package neither compiles numba kernels nor imports matplotlib."""
-    code = (f"import sys, {pkg}; "
-            "assert 'matplotlib' not in sys.modules, 'matplotlib imported'; "
-            "import numba.core.registry as r; "
-            "n = sum(len(d.overloads) for d in r.cpu_target.target_context._defns.values()) "
-            "if hasattr(r.cpu_target.target_context, '_defns') else 0; print('ok')")
-    out = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True)
-    assert out.returncode == 0, out.stderr
+    """Importing every module of a package compiles no numba kernel and loads no matplotlib."""
+    out = subprocess.run([sys.executable, "-c", _NO_WORK.format(pkg=pkg)], cwd=ROOT,
+                         capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr[-2000:]
+    if pkg in ("sim", "semkit", "gbmgen"):
+        assert int(out.stdout.split()[-1]) > 0  # the check saw the package's kernels
