@@ -39,6 +39,15 @@ MAX_STEP_DISPLACEMENT = 0.25
 #: An overlap larger than this fraction of the smaller radius is an instability.
 MAX_OVERLAP = 1.0
 
+#: Reach of an unbonded smooth joint, as a fraction of the smaller radius: once the ball gap
+#: (d - R_i - R_j) exceeds it, the joint faces are apart and the joint carries nothing (its
+#: normal state follows the gap, un = -g, so it closes again when the balls touch). Joints are
+#: installed at gaps up to ~0.6 min(R) (gbmgen bond gap 0.5 r_mean). Without a reach, a grain
+#: ejected from a specimen kept acting on its old neighbours from tens of radii away: spin
+#: increments w·a at the mid-gap contact point (a ~ d/2) closed the open joint and it fired
+#: with a lever arm of d/2 (UCS blow-up "particle moved > 0.25 R", docs/sim.md).
+SJ_REACH = 1.0
+
 #: Servo: fraction of the stress error corrected per step (PFC's alpha = 0.5) and the
 #: largest servo speed, m/s.
 SERVO_ALPHA = 0.5

@@ -181,7 +181,7 @@ def sj_range(lo, hi, step, dt, kin, bi, bj, bstate, fn_, fs_, un_, kna_, ksa_,
         dus = (-vxc * jy + vyc * jx) * dt
         un, fn, fs, state, broke = sj_update(un_[b], fs_[b], bstate[b], dun, dus, kna_[b],
                                              ksa_[b], tena_[b], coha_[b], tanfa_[b], fric_[b],
-                                             tandil_[b])
+                                             tandil_[b], hg + hg, ri if ri < rj else rj)
         un_[b] = un
         fn_[b] = fn
         fs_[b] = fs

@@ -3,13 +3,16 @@
 The joint frame (n̂j, t̂j) is fixed at installation; forces act along it and never along the
 ball–ball line, and the joint carries no moment. The normal state is kept as the elastic normal
 overlap ``un`` = −(U_n − U_n,0) + U_d (m), so that F_n = sj_kn·Ā·un in the bonded state
-(tension allowed) and F_n = sj_kn·Ā·max(0, un) once unbonded. Scalar laws; they check nothing.
+(tension allowed) and F_n = sj_kn·Ā·max(0, un) once unbonded. An unbonded joint acts only while
+its balls are within reach (gap ≤ ``config.SJ_REACH`` × min(R)); beyond that its normal state
+follows the gap (un = −g) and it carries nothing. Scalar laws; they check nothing.
 """
 from .._jit import njit
+from ..config import SJ_REACH
 
 
 @njit
-def sj_update(un, fs, state, dun, dus, kna, ksa, tena, coha, tanfa, fric, tandil):
+def sj_update(un, fs, state, dun, dus, kna, ksa, tena, coha, tanfa, fric, tandil, gap, rmin):
     """Incremental update of one smooth joint.
 
     Parameters
@@ -28,6 +31,12 @@ def sj_update(un, fs, state, dun, dus, kna, ksa, tena, coha, tanfa, fric, tandil
         sj_ten·Ā, sj_coh·Ā.
     tanfa, fric, tandil : float
         tan(sj_fa), μ_j (sj_fric), tan ψ (dilation).
+    gap, rmin : float, m
+        Current ball gap d − R_i − R_j and the smaller radius. An unbonded joint whose gap
+        exceeds ``SJ_REACH`` × rmin is out of reach: no force, shear history cleared, and
+        un = −gap, so that it closes again when the balls touch. Without this, the spin
+        increments w·a of balls far apart (a = R + gap/2) closed the open joint and it fired
+        across the gap with a lever arm of d/2.
 
     Returns
     -------
@@ -50,6 +59,8 @@ def sj_update(un, fs, state, dun, dus, kna, ksa, tena, coha, tanfa, fric, tandil
         state = 2
         broke = 2
     # unbonded (frictional, with dilation)
+    if gap > SJ_REACH * rmin:
+        return -gap, 0.0, 0.0, state, broke
     if un <= 0.0:
         return un, 0.0, 0.0, state, broke
     fn = kna * un

@@ -32,8 +32,13 @@ def parallel_bond(fn, fs, m, dun, dus, dth, r1, r2, emod, kratio, ten, coh, fa_d
     return fn, fs, m, 0
 
 
-def smooth_joint(un, fs, state, dun, dus, kn_a, ks_a, ten_a, coh_a, fa_deg, fric, dil_deg=0.0):
-    """Returns (un, fn, fs, state) (REFERENCE.md §4); un = elastic normal overlap."""
+def smooth_joint(un, fs, state, dun, dus, kn_a, ks_a, ten_a, coh_a, fa_deg, fric, dil_deg=0.0,
+                 gap=0.0, rmin=1.0, reach=1.0):
+    """Returns (un, fn, fs, state) (REFERENCE.md §4); un = elastic normal overlap.
+
+    Engine rule (config.SJ_REACH = ``reach``): an unbonded joint whose ball gap exceeds
+    reach x rmin is out of reach: no force, un = -gap.
+    """
     un = un - dun
     if state == 0:
         fn = kn_a * un
@@ -43,6 +48,8 @@ def smooth_joint(un, fs, state, dun, dus, kn_a, ks_a, ten_a, coh_a, fa_deg, fric
         if abs(fsb) < coh_a + fn * math.tan(math.radians(fa_deg)):
             return un, fn, fsb, 0
         state = 2
+    if gap > reach * rmin:
+        return -gap, 0.0, 0.0, state
     if un <= 0:
         return un, 0.0, 0.0, state
     fn = kn_a * un

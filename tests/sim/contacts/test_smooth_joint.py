@@ -7,6 +7,7 @@ from _reference import smooth_joint as ref_sj
 from _sim_fixtures import disks
 
 from sim import Simulation
+from sim.config import SJ_REACH
 from sim.contacts.smooth_joint import sj_update
 
 R = 1e-3
@@ -20,9 +21,12 @@ def test_kernel_matches_reference(rng):
         kna, ksa = rng.uniform(1e8, 1e10, 2)
         tena, coha = rng.uniform(0, 2e3, 2)
         fa, fric, dil = rng.uniform(0, 45), rng.uniform(0, 1.2), rng.uniform(0, 10)
+        rmin = 1e-4
+        gap = rng.uniform(-0.05, 2.0) * SJ_REACH * rmin   # in and out of reach
         got = sj_update(un, fs, state, dun, dus, kna, ksa, tena, coha, math.tan(math.radians(fa)),
-                        fric, math.tan(math.radians(dil)))
-        want = ref_sj(un, fs, state, dun, dus, kna, ksa, tena, coha, fa, fric, dil)
+                        fric, math.tan(math.radians(dil)), gap, rmin)
+        want = ref_sj(un, fs, state, dun, dus, kna, ksa, tena, coha, fa, fric, dil, gap=gap,
+                      rmin=rmin, reach=SJ_REACH)
         assert got[3] == want[3]
         np.testing.assert_allclose(got[:3], want[:3], rtol=1e-12, atol=1e-18)
 
@@ -90,3 +94,57 @@ def test_inclined_joint_slides_at_mu_fn_along_joint_plane(fric):
     # zero tensile strength: the joint is broken (unbonded) from its installation, step 0
     assert sim.cracks.counts()["sj_tension"] == 1
     assert sim.cracks.to_frame()["step"].tolist() == [0]
+
+
+def _separated_pair(nj, gap_r, steps=500):
+    """Two touching disks joined by a zero-strength joint (broken at step 0), ball 1 carried
+    along +x until the ball gap is ``gap_r`` x R, then both at rest and free."""
+    s = disks([0.0, 2 * R], [0.0, 0.0], R, bonds=[(0, 1)], kinds=[1], joint_normals=[nj],
+              sj=dict(kn=1e12, ks=5e11, ten=0.0, coh=0.0, fa=30.0, fric=0.6))
+    sim = Simulation(s, damping=0.0)
+    sim.fix_velocity([0], 0.0, 0.0, 0.0)
+    sim.fix_velocity([1], gap_r * R / (steps * sim.dt), 0.0, 0.0)
+    sim.cycle(steps)
+    sim.free([0, 1])
+    sim.set_velocity([0, 1], 0.0, 0.0, 0.0)
+    assert (sim.x[1] - sim.x[0]) - 2 * R == pytest.approx(gap_r * R, rel=1e-9)
+    return sim
+
+
+def test_separated_unbonded_joint_cannot_act_at_a_distance():
+    """Regression (UCS seed-3 blow-up, 'particle moved > 0.25 R' on particle 489): a grain
+    squeezed out of a specimen kept its broken smooth joints to balls 70 R away. The joint's
+    contact point sits at mid-gap, so spin increments w·a (a ≈ d/2) drove the open joint
+    closed again and it fired with F = kn·Ā·un at a lever arm of 36 R. An unbonded joint
+    whose balls are more than config.SJ_REACH x min(R) apart carries nothing."""
+    nj = (math.cos(math.radians(60.0)), math.sin(math.radians(60.0)))
+    sim = _separated_pair(nj, 20.0)
+    # same-sense spin: the relative contact-point velocity at mid-gap is -w·d along t,
+    # i.e. w·d·sin(60°) per unit time closing along the joint normal (d = 22 R)
+    w = 1000.0
+    sim.set_velocity([0, 1], 0.0, 0.0, w)
+    ek0 = sim.energy()["kinetic"]
+    steps = 3000   # the spurious closure (w d sin60 · steps dt) is ~3x the 10 R opening
+    assert w * 22 * R * math.sin(math.radians(60.0)) * steps * sim.dt > 2.5 * 10 * R
+    for _ in range(steps // 100):
+        sim.cycle(100)
+        assert sim.bond_forces()[0][0] == 0.0 and sim.bond_forces()[1][0] == 0.0
+    np.testing.assert_array_equal(sim.vx, [0.0, 0.0])
+    np.testing.assert_array_equal(sim.vy, [0.0, 0.0])
+    np.testing.assert_array_equal(sim.w, [w, w])
+    assert sim.energy()["kinetic"] == ek0
+
+
+def test_separated_joint_closes_again_when_the_balls_touch():
+    """Out of reach the joint's normal state follows the ball gap (un = -g), so a pair that
+    comes back head-on along the joint normal is pushed apart from the moment it touches."""
+    sim = _separated_pair((1.0, 0.0), 3.0)
+    kna = 1e12 * 2 * R
+    sim.fix_velocity([0], 0.0, 0.0, 0.0)
+    steps = 600
+    ov = 1e-7
+    v = -(3.0 * R + ov) / (steps * sim.dt)
+    sim.fix_velocity([1], v, 0.0, 0.0)
+    sim.cycle(steps)
+    assert 2 * R - (sim.x[1] - sim.x[0]) == pytest.approx(ov, rel=1e-6)
+    assert sim.bond_forces()[0][0] == pytest.approx(kna * ov, rel=1e-5)
