@@ -23,9 +23,10 @@ def _common(p, *, rate=True):
     p.add_argument("--params", metavar="FILE.yaml",
                    help="micro-parameter file applied to the specimen's minerals by name")
     if rate:
-        p.add_argument("--platen-velocity", type=float, default=DEFAULT_PLATEN_VELOCITY,
-                       help="speed of each platen/grip/jaw, m/s "
-                            f"(default {DEFAULT_PLATEN_VELOCITY}, from the convergence study)")
+        p.add_argument("--platen-velocity", type=float, default=None,
+                       help="constant speed of each platen/grip/jaw, m/s (default "
+                            f"{DEFAULT_PLATEN_VELOCITY}, from the convergence study; for the "
+                            "UCS, giving it selects the constant-speed mode, see --adaptive)")
         p.add_argument("--strain-rate", type=float, default=None,
                        help="loading strain rate, 1/s (overrides --platen-velocity)")
     p.add_argument("--post-peak", type=float, default=DEFAULT_POST_PEAK,
@@ -54,6 +55,14 @@ def register(subparsers):
         _common(p)
         p.set_defaults(func=run_test_command, test=name)
         if name == "ucs":
+            p.add_argument("--adaptive", dest="adaptive", action="store_true", default=None,
+                           help="adaptive platen speed (the default unless --platen-velocity "
+                                "or --strain-rate is given): up to 16x the base speed "
+                                "(0.00625 m/s) while "
+                                "elastic and crack-free, the base speed when cracking, "
+                                "softening and post-peak (docs/labtests.md)")
+            p.add_argument("--constant-speed", dest="adaptive", action="store_false",
+                           help="constant platen speed (the base speed throughout)")
             p.add_argument("--e-method", choices=("tangent", "secant"), default="tangent",
                            help="E at 50 %% of the peak: tangent (default) or secant")
         if name == "tension":
@@ -109,7 +118,11 @@ def run_test_command(args) -> int:
     except InputError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
-    kw = dict(strain_rate=args.strain_rate, platen_velocity=args.platen_velocity,
+    from .loading import DEFAULT_PLATEN_VELOCITY
+    v = DEFAULT_PLATEN_VELOCITY if args.platen_velocity is None else args.platen_velocity
+    if args.test == "ucs" and args.platen_velocity is None:
+        v = None                    # the UCS picks the base speed of its loading mode
+    kw = dict(strain_rate=args.strain_rate, platen_velocity=v,
               max_strain=args.max_strain,
               post_peak=None if args.max_strain is not None else args.post_peak,
               damping=args.damping, timestep_factor=args.timestep_factor, out=None,
@@ -118,6 +131,10 @@ def run_test_command(args) -> int:
     if args.test == "ucs":
         from .ucs import run_ucs as fn
         kw["e_method"] = args.e_method
+        adaptive = args.adaptive
+        if adaptive is None:        # default: adaptive unless a constant speed/rate was given
+            adaptive = args.platen_velocity is None and args.strain_rate is None
+        kw["adaptive"] = adaptive
     elif args.test == "tension":
         from .tension import run_tension as fn
         if args.grip_depth_mm is not None:

@@ -53,13 +53,13 @@ def compression_summary(history, *, stress_col="axial_stress_mpa", e_method="tan
 
 
 def run_ucs(specimen, *, strain_rate: float | None = None,
-            platen_velocity: float = ld.DEFAULT_PLATEN_VELOCITY,
+            platen_velocity: float | None = None,
             post_peak: float | None = ld.DEFAULT_POST_PEAK, max_strain: float | None = None,
             damping: float = 0.7, timestep_factor: float | None = ld.DEFAULT_TIMESTEP_FACTOR,
             record_strain: float = ld.RECORD_STRAIN, ramp_records: int = 5,
             e_method: str = "tangent", limit_strain: float = 0.05, out=None,
             progress: bool = True, figures: bool = True, checkpoint_every: int = 0,
-                sim_options=None) -> TestResult:
+            adaptive: bool | None = None, sim_options=None) -> TestResult:
     """Uniaxial compression of ``specimen`` between rigid frictionless platens.
 
     Parameters
@@ -67,9 +67,11 @@ def run_ucs(specimen, *, strain_rate: float | None = None,
     specimen : sim.Specimen
     strain_rate : float, 1/s, optional
         Loading strain rate; default 2 ``platen_velocity`` / L (L the loaded length).
-    platen_velocity : float, m/s
-        Speed of each platen when ``strain_rate`` is not given (default
-        :data:`sim.protocols.loading.DEFAULT_PLATEN_VELOCITY`).
+    platen_velocity : float, m/s, optional
+        Speed of each platen when ``strain_rate`` is not given: the constant speed, or the
+        base (slowest) speed of the adaptive rule. Default
+        :data:`sim.protocols.loading.ADAPTIVE_BASE_VELOCITY` (0.00625) when adaptive,
+        :data:`sim.protocols.loading.DEFAULT_PLATEN_VELOCITY` (0.0125) at constant speed.
         The speed is reached after a linear ramp over the first ``ramp_records`` records.
     post_peak : float or None
         Stop when the stress falls below this fraction of the peak (default 0.8).
@@ -91,6 +93,11 @@ def run_ucs(specimen, *, strain_rate: float | None = None,
         Also draw stress_strain.png and crack_map.png when writing ``out``.
     checkpoint_every : int
         Also checkpoint every this many records (0: only on Ctrl-C).
+    adaptive : bool, optional
+        Adaptive platen speed (:class:`sim.protocols.loading.AdaptiveSpeed`): up to
+        16 x the base speed while elastic and crack-free (capped by a kinetic/strain energy
+        check), the base speed while cracking, softening and after the peak. Default
+        :data:`sim.protocols.loading.ADAPTIVE_DEFAULT` (True).
     sim_options : dict, optional
         More keyword options for the engine's ``Simulation``.
 
@@ -107,6 +114,10 @@ def run_ucs(specimen, *, strain_rate: float | None = None,
         partial outputs are written.
     """
     stop = ld.StopRule(post_peak=post_peak, max_strain=max_strain)
+    if adaptive is None:
+        adaptive = ld.ADAPTIVE_DEFAULT
+    if platen_velocity is None:
+        platen_velocity = ld.ADAPTIVE_BASE_VELOCITY if adaptive else ld.DEFAULT_PLATEN_VELOCITY
     specimen, _ = ld.relieve_overlaps(specimen.validate("specimen"))
     opts = dict(damping=damping, **(sim_options or {}))
     if timestep_factor is not None:
@@ -126,8 +137,10 @@ def run_ucs(specimen, *, strain_rate: float | None = None,
     max_steps = int(math.ceil((min(stop_strain, limit_strain) + ramp_records * record_strain)
                               / (strain_rate * dt))) + chunk
 
+    speed = ld.AdaptiveSpeed(n_bonds=int(specimen.n_bonds)) if adaptive else None
+
     def on_chunk(k):
-        f = min(1.0, (k + 1) / max(1, ramp_records))
+        f = min(1.0, (k + 1) / max(1, ramp_records)) * loop.factor
         sim.set_wall_velocity(lo, 0.0, f * v)
         sim.set_wall_velocity(hi, 0.0, -f * v)
 
@@ -144,14 +157,19 @@ def run_ucs(specimen, *, strain_rate: float | None = None,
                 "confining_stress_mpa": 0.0,
                 **{f"cracks_{k}": c[k] for k in analysis.CRACK_KINDS},
                 "cracks_total": c["total"], "kinetic_energy_j": ek, "strain_energy_j": es,
-                "gauge_axial_strain": ga, "gauge_lateral_strain": gl}
+                "gauge_axial_strain": ga, "gauge_lateral_strain": gl,
+                "platen_velocity_m_per_s": v * (loop.factor if loop is not None else 1.0)}
 
     options = dict(strain_rate_per_s=strain_rate, platen_velocity_m_per_s=v,
                    post_peak=post_peak, max_strain=max_strain, damping=damping,
                    timestep_factor=timestep_factor, record_strain=record_strain,
-                   e_method=e_method)
+                   e_method=e_method, adaptive=bool(adaptive),
+                   adaptive_rule=None if speed is None else {
+                       k: getattr(speed, k) for k in ("f_max", "crack_scale", "tan_fast",
+                                                      "tan_slow", "peak_drop", "window",
+                                                      "rise", "ke_ratio")})
     loop = ld.LoadingLoop(sim=sim, record=record, chunk=chunk, max_steps=max_steps, stop=stop,
-                          on_chunk=on_chunk, progress=progress, desc="ucs",
+                          on_chunk=on_chunk, progress=progress, desc="ucs", speed=speed,
                           checkpoint_every=checkpoint_every,
                           checkpoint=None if out is None else f"{out}/checkpoint.npz")
 

@@ -268,3 +268,21 @@ def test_engine_instability_after_the_peak_ends_the_test_with_its_answer(rock, m
     monkeypatch.setattr(Simulation, "cycle", cycle_early)
     with pytest.raises(InstabilityError):
         run_ucs(rock, strain_rate=RATE, post_peak=0.3, progress=False)
+
+
+def test_ucs_adaptive_speed_fast_before_cracks_base_after_peak(rock):
+    """The default adaptive rule loads faster than the base rate while crack-free, at the
+    base rate after the peak, and takes fewer steps than the constant base rate."""
+    ad = run_ucs(rock, strain_rate=RATE, progress=False)
+    const = run_ucs(rock, strain_rate=RATE, adaptive=False, progress=False)
+    assert ad.summary["options"]["adaptive"] and not const.summary["options"]["adaptive"]
+    h = ad.history
+    v0 = const.summary["options"]["platen_velocity_m_per_s"]
+    v = h["platen_velocity_m_per_s"].to_numpy()
+    free = h["cracks_total"].to_numpy() == 0
+    assert v[free].max() > 4 * v0
+    ip = int(np.argmax(h["axial_stress_mpa"]))
+    assert np.allclose(v[ip + 2:], v0)
+    assert np.all(v >= v0 * (1 - 1e-12))
+    assert ad.summary["steps"] < const.summary["steps"]
+    assert np.allclose(const.history["platen_velocity_m_per_s"], v0)
