@@ -59,7 +59,7 @@ def run_ucs(specimen, *, strain_rate: float | None = None,
             record_strain: float = ld.RECORD_STRAIN, ramp_records: int = 5,
             e_method: str = "tangent", limit_strain: float = 0.05, out=None,
             progress: bool = True, figures: bool = True, checkpoint_every: int = 0,
-            adaptive: bool | None = None, sim_options=None) -> TestResult:
+            adaptive: bool | dict | None = None, sim_options=None) -> TestResult:
     """Uniaxial compression of ``specimen`` between rigid frictionless platens.
 
     Parameters
@@ -97,7 +97,8 @@ def run_ucs(specimen, *, strain_rate: float | None = None,
         Adaptive platen speed (:class:`sim.protocols.loading.AdaptiveSpeed`): up to
         16 x the base speed while elastic and crack-free (capped by a kinetic/strain energy
         check), the base speed while cracking, softening and after the peak. Default
-        :data:`sim.protocols.loading.ADAPTIVE_DEFAULT` (True).
+        :data:`sim.protocols.loading.ADAPTIVE_DEFAULT` (True). A dict: adaptive, with these
+        fields of :class:`~sim.protocols.loading.AdaptiveSpeed` changed (e.g. ``f_max``).
     sim_options : dict, optional
         More keyword options for the engine's ``Simulation``.
 
@@ -137,7 +138,10 @@ def run_ucs(specimen, *, strain_rate: float | None = None,
     max_steps = int(math.ceil((min(stop_strain, limit_strain) + ramp_records * record_strain)
                               / (strain_rate * dt))) + chunk
 
-    speed = ld.AdaptiveSpeed(n_bonds=int(specimen.n_bonds)) if adaptive else None
+    speed = None
+    if adaptive:
+        rule = adaptive if isinstance(adaptive, dict) else {}
+        speed = ld.AdaptiveSpeed(n_bonds=int(specimen.n_bonds), **rule)
 
     def on_chunk(k):
         f = min(1.0, (k + 1) / max(1, ramp_records)) * loop.factor
