@@ -60,6 +60,10 @@ def main(argv=None):
                    help="only time this many loading steps (platens moving) and extrapolate "
                         "the full run from the steps it needs at the default speed")
     p.add_argument("--out", default="benchmarks/results")
+    p.add_argument("--run-out", default=None,
+                   help="also write the test's outputs (summary.json, history.csv, ...) there; "
+                        "Ctrl-C (SIGINT) then leaves partial outputs and a checkpoint, and the "
+                        "JSON reports the partial run")
     a = p.parse_args(argv)
     from sim import Specimen
     from sim.protocols.parameters import apply_parameters, start_parameters
@@ -85,7 +89,33 @@ def main(argv=None):
     if a.probe_steps:
         return _probe(spec, a)
     t0 = time.perf_counter()
-    r = run_ucs(spec, progress=True, **kw)
+    if a.run_out:
+        kw["out"] = a.run_out
+        kw["figures"] = False
+    try:
+        r = run_ucs(spec, progress=True, **kw)
+    except KeyboardInterrupt:
+        if not a.run_out:
+            raise
+        import pandas as pd
+        wall = time.perf_counter() - t0
+        with open(os.path.join(a.run_out, "summary.json")) as f:
+            s = json.load(f)
+        h = pd.read_csv(os.path.join(a.run_out, "history.csv"))
+        res = {"n_particles": spec.n_particles, "steps": s["steps"], "dt_s": s["dt_s"],
+               "wall_s": wall, "loop_wall_s": s["wall_s"],
+               "particle_steps_per_s": s["particle_steps_per_s"],
+               "strain_reached": float(h["axial_strain"].iloc[-1]),
+               "stress_reached_mpa": float(h["axial_stress_mpa"].iloc[-1]),
+               "peak_so_far_mpa": float(h["axial_stress_mpa"].max()),
+               "cracks_so_far": int(h["cracks_total"].iloc[-1]),
+               "stop_reason": "interrupted", "options": s["options"],
+               "note": "partial run (interrupted); 2-core machine shared"}
+        os.makedirs(a.out, exist_ok=True)
+        with open(os.path.join(a.out, "ucs_thesis_scale.json"), "w") as f:
+            json.dump(res, f, indent=2, default=str)
+        print(json.dumps(res, indent=2, default=str))
+        return 1
     wall = time.perf_counter() - t0
     s = r.summary
     strain = float(r.history["axial_strain"].iloc[-1])
