@@ -63,6 +63,10 @@ def register(subparsers):
                                 "softening and post-peak (docs/labtests.md)")
             p.add_argument("--constant-speed", dest="adaptive", action="store_false",
                            help="constant platen speed (the base speed throughout)")
+            p.add_argument("--resume", action="store_true",
+                           help="continue an interrupted test from --out (checkpoint.npz, "
+                                "history.csv, summary.json written on Ctrl-C); same specimen "
+                                "and options")
             p.add_argument("--e-method", choices=("tangent", "secant"), default="tangent",
                            help="E at 50 %% of the peak: tangent (default) or secant")
         if name == "tension":
@@ -135,6 +139,7 @@ def run_test_command(args) -> int:
         if adaptive is None:        # default: adaptive unless a constant speed/rate was given
             adaptive = args.platen_velocity is None and args.strain_rate is None
         kw["adaptive"] = adaptive
+        kw["resume"] = args.resume
     elif args.test == "tension":
         from .tension import run_tension as fn
         if args.grip_depth_mm is not None:

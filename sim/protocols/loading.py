@@ -480,7 +480,7 @@ class LoadingLoop:
             self.rows.append(self.record())
         strain.extend(r[self.strain_key] for r in self.rows)
         stress.extend(r[self.stress_key] * 1e6 for r in self.rows)
-        k = 0
+        k = len(self.rows) - 1          # chunks done (> 0 when resuming)
         try:
             while self.steps < self.max_steps:
                 if self.speed is not None:

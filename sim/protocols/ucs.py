@@ -52,6 +52,35 @@ def compression_summary(history, *, stress_col="axial_stress_mpa", e_method="tan
     }
 
 
+def _load_partial(out, specimen):
+    """Engine state, records, step count and record interval of an interrupted UCS in ``out``."""
+    import json
+    import os
+
+    import pandas as pd
+
+    from ..simulation import Simulation
+    paths = {k: os.path.join(out, k) for k in ("checkpoint.npz", "history.csv", "summary.json")}
+    missing = [p for p in paths.values() if not os.path.exists(p)]
+    if missing:
+        raise FileNotFoundError(f"cannot resume: missing {', '.join(missing)}")
+    with open(paths["summary.json"], encoding="utf-8") as f:
+        summary = json.load(f)
+    opts = summary.get("options", {})
+    if summary.get("test") != "ucs" or "chunk_steps" not in opts:
+        raise ValueError(f"cannot resume: {paths['summary.json']} is not a resumable UCS run")
+    sim = Simulation.load(paths["checkpoint.npz"])
+    if sim.n_particles != specimen.n_particles:
+        raise ValueError(f"cannot resume: the checkpoint has {sim.n_particles} particles, the "
+                         f"specimen {specimen.n_particles}")
+    hist = pd.read_csv(paths["history.csv"])
+    rows = [{k: (v.item() if hasattr(v, "item") else v) for k, v in r.items()}
+            for r in hist.to_dict("records")]
+    steps = int(rows[-1]["step"] - rows[0]["step"]) if rows else 0
+    return sim, {"rows": rows, "steps": steps, "wall_s": float(summary.get("wall_s") or 0.0),
+                 "chunk_steps": int(opts["chunk_steps"]), "max_steps": int(opts["max_steps"])}
+
+
 def run_ucs(specimen, *, strain_rate: float | None = None,
             platen_velocity: float | None = None,
             post_peak: float | None = ld.DEFAULT_POST_PEAK, max_strain: float | None = None,
@@ -59,7 +88,8 @@ def run_ucs(specimen, *, strain_rate: float | None = None,
             record_strain: float = ld.RECORD_STRAIN, ramp_records: int = 5,
             e_method: str = "tangent", limit_strain: float = 0.05, out=None,
             progress: bool = True, figures: bool = True, checkpoint_every: int = 0,
-            adaptive: bool | dict | None = None, sim_options=None) -> TestResult:
+            adaptive: bool | dict | None = None, resume: bool = False,
+            sim_options=None) -> TestResult:
     """Uniaxial compression of ``specimen`` between rigid frictionless platens.
 
     Parameters
@@ -99,6 +129,13 @@ def run_ucs(specimen, *, strain_rate: float | None = None,
         check), the base speed while cracking, softening and after the peak. Default
         :data:`sim.protocols.loading.ADAPTIVE_DEFAULT` (True). A dict: adaptive, with these
         fields of :class:`~sim.protocols.loading.AdaptiveSpeed` changed (e.g. ``f_max``).
+    resume : bool
+        Continue an interrupted test from ``out``: the engine state from
+        ``out/checkpoint.npz``, the records from ``out/history.csv`` and the step count and
+        record interval from ``out/summary.json`` (all written on Ctrl-C, or the checkpoint
+        every ``checkpoint_every`` records). Give the same specimen and options as the
+        interrupted run. A checkpoint taken between two records (Ctrl-C inside a chunk) adds
+        one record at the resume point.
     sim_options : dict, optional
         More keyword options for the engine's ``Simulation``.
 
@@ -123,20 +160,30 @@ def run_ucs(specimen, *, strain_rate: float | None = None,
     opts = dict(damping=damping, **(sim_options or {}))
     if timestep_factor is not None:
         opts["timestep_factor"] = timestep_factor
-    sim = ld.make_simulation(specimen, **opts)
     box = specimen.box
-    lo, hi = ld.add_platens(sim, box, axis=1, fric=0.0)
-    h0 = ld.platen_gap(sim, lo, hi)
+    if resume:
+        if out is None:
+            raise ValueError("'resume' needs 'out' (the interrupted run's results directory)")
+        sim, prev = _load_partial(out, specimen)
+        lo, hi = 0, 1
+        x0, y0 = np.array(specimen.x, copy=True), np.array(specimen.y, copy=True)
+    else:
+        sim = ld.make_simulation(specimen, **opts)
+        lo, hi = ld.add_platens(sim, box, axis=1, fric=0.0)
+        x0, y0 = np.array(sim.x, copy=True), np.array(sim.y, copy=True)
+    h0 = float(box[3]) - float(box[2])
     w0 = float(box[1] - box[0])
     strain_rate, v = ld.loading_rate(strain_rate, platen_velocity, h0)
-    x0, y0 = np.array(sim.x, copy=True), np.array(sim.y, copy=True)
     gauge = ld.gauge_indices(x0, y0, box)
     left, right = ld.side_indices(x0, specimen.r, box)
-    dt = float(sim.dt)
-    chunk = max(1, int(round(record_strain / (strain_rate * dt))))
-    stop_strain = max_strain if max_strain is not None else limit_strain
-    max_steps = int(math.ceil((min(stop_strain, limit_strain) + ramp_records * record_strain)
-                              / (strain_rate * dt))) + chunk
+    if resume:
+        chunk, max_steps = prev["chunk_steps"], prev["max_steps"]
+    else:
+        dt = float(sim.dt)
+        chunk = max(1, int(round(record_strain / (strain_rate * dt))))
+        stop_strain = max_strain if max_strain is not None else limit_strain
+        max_steps = int(math.ceil((min(stop_strain, limit_strain)
+                                   + ramp_records * record_strain) / (strain_rate * dt))) + chunk
 
     speed = None
     if adaptive:
@@ -167,7 +214,8 @@ def run_ucs(specimen, *, strain_rate: float | None = None,
     options = dict(strain_rate_per_s=strain_rate, platen_velocity_m_per_s=v,
                    post_peak=post_peak, max_strain=max_strain, damping=damping,
                    timestep_factor=timestep_factor, record_strain=record_strain,
-                   e_method=e_method, adaptive=bool(adaptive),
+                   e_method=e_method, chunk_steps=chunk, max_steps=max_steps,
+                   adaptive=bool(adaptive),
                    adaptive_rule=None if speed is None else {
                        k: getattr(speed, k) for k in ("f_max", "crack_scale", "tan_fast",
                                                       "tan_slow", "peak_drop", "window",
@@ -190,6 +238,15 @@ def run_ucs(specimen, *, strain_rate: float | None = None,
             res.write(out, figures=figures)
         return res
 
+    if resume:
+        loop.rows = prev["rows"]
+        loop.steps, loop.wall_s = prev["steps"], prev["wall_s"]
+        if speed is not None:          # replay the rule's decisions (its state: factor, tmax)
+            for n in range(1, len(loop.rows)):
+                loop.factor = float(speed.update(loop.rows[:n]))
+        if int(sim.step) != int(loop.rows[-1]["step"]):     # checkpoint inside a chunk
+            loop.steps += int(sim.step) - int(loop.rows[-1]["step"])
+            loop.rows.append(record())
     try:
         loop.run()
     except KeyboardInterrupt:

@@ -286,3 +286,39 @@ def test_ucs_adaptive_speed_fast_before_cracks_base_after_peak(rock):
     assert np.all(v >= v0 * (1 - 1e-12))
     assert ad.summary["steps"] < const.summary["steps"]
     assert np.allclose(const.history["platen_velocity_m_per_s"], v0)
+
+
+def test_ucs_interrupted_and_resumed_gives_the_uninterrupted_result(rock, tmp_path,
+                                                                    monkeypatch):
+    """Ctrl-C (KeyboardInterrupt) between two records leaves checkpoint.npz + partial outputs;
+    ``resume=True`` continues the protocol loop and ends with the same records and summary."""
+    from sim.simulation import Simulation
+    ref = run_ucs(rock, strain_rate=RATE, progress=False, out=tmp_path / "ref", figures=False)
+    cut = int(ref.history["step"].iloc[len(ref.history) // 2])
+    orig = Simulation.cycle
+    fired = []
+
+    def cycle(self, n, **kw):
+        if self.step >= cut and not fired:
+            fired.append(self.step)
+            raise KeyboardInterrupt
+        return orig(self, n, **kw)
+
+    monkeypatch.setattr(Simulation, "cycle", cycle)
+    out = tmp_path / "run"
+    with pytest.raises(KeyboardInterrupt):
+        run_ucs(rock, strain_rate=RATE, progress=False, out=out, figures=False)
+    part = json.loads((out / "summary.json").read_text())
+    assert part["stop_reason"] == "interrupted" and (out / "checkpoint.npz").exists()
+    assert 0 < part["steps"] < ref.summary["steps"]
+    res = run_ucs(rock, strain_rate=RATE, progress=False, out=out, figures=False, resume=True)
+    a, b = ref.summary, res.summary
+    assert b["stop_reason"] == "post_peak" and b["steps"] == a["steps"]
+    for k in ("ucs_mpa", "E_gpa", "nu", "ci_mpa", "cd_mpa", "peak_axial_strain"):
+        assert b[k] == pytest.approx(a[k], rel=1e-12, abs=1e-12), k
+    assert b["cracks"] == a["cracks"]
+    cols = ["step", "axial_strain", "axial_stress_mpa", "cracks_total", "gauge_axial_strain"]
+    pd.testing.assert_frame_equal(res.history[cols].reset_index(drop=True),
+                                  ref.history[cols].reset_index(drop=True), rtol=1e-12)
+    with pytest.raises(FileNotFoundError, match="cannot resume"):
+        run_ucs(rock, strain_rate=RATE, progress=False, out=tmp_path / "none", resume=True)
