@@ -247,11 +247,20 @@ def gather_range(lo, hi, nrows, fx, fy, fm, acc):
         fm[p] = sm
 
 
+PAIR_BLOCK = 1024  # particles per block of the pair pass (kin + acc of a block stay in L2)
+
+
 @njit
 def pairs_chunk(c, nchunks, step, dt, use_dash, kin, bi, bj, bstate, bf, npb, nsj, ci, cj, cf,
                 nc, acc, sleep, sleep_d):
-    """All pair laws of chunk ``c`` (its share of parallel bonds, smooth joints and contacts),
-    accumulated into ``acc`` (this chunk's buffer row).
+    """All pair laws of chunk ``c``, accumulated into ``acc`` (this chunk's buffer row).
+
+    The chunk owns the particles ``n c / T : n (c + 1) / T`` and takes the parallel-bonded pairs
+    and the contacts whose first particle it owns (both lists are sorted by first particle; the
+    ranges come from binary searches, which tile each list exactly whatever its order). It walks
+    its particles in blocks of ``PAIR_BLOCK``: the bonds, then the contacts of each block, so
+    the block's kinematics and force buffer are still in cache for the second list. Smooth
+    joints are split by count.
 
     Returns
     -------
@@ -261,18 +270,54 @@ def pairs_chunk(c, nchunks, step, dt, use_dash, kin, bi, bj, bstate, bf, npb, ns
     kworst : int
         Its contact index, or −(bond index) − 2 for a parallel-bonded pair.
     """
+    n = kin.size // 8
+    plo = (n * c) // nchunks
+    phi = (n * (c + 1)) // nchunks
     nbreak = 0
     bworst = 0.0
     kb = -1
-    if npb > 0:
-        lo = (npb * c) // nchunks
-        hi = (npb * (c + 1)) // nchunks
-        nbreak, bworst, kb = pb_range(lo, hi, step, dt, kin, bi, bj, bstate, bf[FN], bf[FS],
-                                      bf[MB], bf[KNA], bf[KSA], bf[KNI], bf[ARI], bf[TENA],
-                                      bf[COHA], bf[TANFA], bf[LFS], bf[LFN], bf[LKN], bf[LKS],
-                                      bf[LMU], bf[LCN], bf[LCS], use_dash, acc, sleep, sleep_d,
-                                      bf[BRK_X], bf[BRK_Y], bf[BRK_NX], bf[BRK_NY],
-                                      bf[BRK_STEP])
+    worst = 0.0
+    kworst = -1
+    bpb = bi[:npb]
+    cic = ci[:nc]
+    b0 = np.searchsorted(bpb, plo)
+    k0 = np.searchsorted(cic, plo)
+    p0 = plo
+    while p0 < phi:
+        p1 = min(p0 + PAIR_BLOCK, phi)
+        if p1 == phi and c == nchunks - 1:
+            b1 = npb
+            k1 = nc
+        else:
+            b1 = np.searchsorted(bpb, p1)
+            k1 = np.searchsorted(cic, p1)
+        if b1 > b0:
+            nb_, w_, kb_ = pb_range(b0, b1, step, dt, kin, bi, bj, bstate, bf[FN], bf[FS],
+                                    bf[MB], bf[KNA], bf[KSA], bf[KNI], bf[ARI], bf[TENA],
+                                    bf[COHA], bf[TANFA], bf[LFS], bf[LFN], bf[LKN], bf[LKS],
+                                    bf[LMU], bf[LCN], bf[LCS], use_dash, acc, sleep, sleep_d,
+                                    bf[BRK_X], bf[BRK_Y], bf[BRK_NX], bf[BRK_NY],
+                                    bf[BRK_STEP])
+            nbreak += nb_
+            if w_ > bworst:
+                bworst = w_
+                kb = kb_
+        if k1 > k0:
+            if use_dash:
+                w_, k_ = contact_range_dashpot(k0, k1, dt, kin, ci, cj,
+                                               cf[C_FS], cf[C_KN], cf[C_KS], cf[C_MU],
+                                               cf[C_CN], cf[C_CS], cf[C_FN], acc,
+                                               sleep, sleep_d)
+            else:
+                w_, k_ = contact_range(k0, k1, dt, kin, ci, cj, cf[C_FS],
+                                       cf[C_KN], cf[C_KS], cf[C_MU], cf[C_FN], acc, sleep,
+                                       sleep_d)
+            if w_ > worst:
+                worst = w_
+                kworst = k_
+        b0 = b1
+        k0 = k1
+        p0 = p1
     if nsj > 0:
         lo = npb + (nsj * c) // nchunks
         hi = npb + (nsj * (c + 1)) // nchunks
@@ -281,20 +326,6 @@ def pairs_chunk(c, nchunks, step, dt, use_dash, kin, bi, bj, bstate, bf, npb, ns
                            bf[TANDIL], bf[NJX], bf[NJY], acc, sleep, sleep_d, bf[BRK_X], bf[BRK_Y],
                            bf[BRK_NX],
                            bf[BRK_NY], bf[BRK_STEP])
-    worst = 0.0
-    kworst = -1
-    if nc > 0:
-        lo = (nc * c) // nchunks
-        hi = (nc * (c + 1)) // nchunks
-        if use_dash:
-            worst, kworst = contact_range_dashpot(lo, hi, dt, kin, ci, cj,
-                                                  cf[C_FS], cf[C_KN], cf[C_KS], cf[C_MU],
-                                                  cf[C_CN], cf[C_CS], cf[C_FN], acc,
-                                                  sleep, sleep_d)
-        else:
-            worst, kworst = contact_range(lo, hi, dt, kin, ci, cj, cf[C_FS],
-                                          cf[C_KN], cf[C_KS], cf[C_MU], cf[C_FN], acc, sleep,
-                                          sleep_d)
     if bworst > worst:
         # overlap records of bonded pairs are encoded as -(bond index) - 2
         worst = bworst
