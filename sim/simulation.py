@@ -7,12 +7,12 @@ from __future__ import annotations
 
 import json
 import os
-import tempfile
 
 import numba
 import numpy as np
 
 from . import config
+from ._io import save_npz_atomic
 from .checks import instability_error
 from .contacts.linear import dashpot_coefficients, linear_stiffness
 from .contacts.parallel_bond import pb_constants
@@ -769,9 +769,6 @@ class Simulation:
 
         :meth:`load` of the file continues bit-identically on the same machine and thread count.
         """
-        path = os.fspath(path)
-        d = os.path.dirname(os.path.abspath(path))
-        os.makedirs(d, exist_ok=True)
         meta = dict(format=FORMAT, step=self.step, time=self.time, dt=self.dt,
                     damping=self.damping, timestep_factor=self.timestep_factor,
                     dashpot=list(self.dashpot), density_scale=self.density_scale,
@@ -783,17 +780,7 @@ class Simulation:
         arrays.update({"state__" + k: v for k, v in self.state.to_dict().items()})
         arrays.update({"spec__" + k: v for k, v in self.specimen.to_arrays().items()})
         arrays.update(self.cracks.to_npz_dict())
-        fd, tmp = tempfile.mkstemp(suffix=".npz.tmp", dir=d)
-        try:
-            with os.fdopen(fd, "wb") as f:
-                np.savez(f, **arrays)
-                f.flush()
-                os.fsync(f.fileno())
-            os.replace(tmp, path)
-        except BaseException:
-            if os.path.exists(tmp):
-                os.remove(tmp)
-            raise
+        save_npz_atomic(path, arrays)
 
     @classmethod
     def load(cls, path) -> "Simulation":

@@ -7,11 +7,11 @@ from __future__ import annotations
 
 import json
 import os
-import tempfile
 from dataclasses import dataclass, field, fields
 
 import numpy as np
 
+from ._io import save_npz_atomic
 from .errors import InputError
 
 SCHEMA_VERSION = 1
@@ -186,7 +186,8 @@ class Specimen:
             if np.any(getattr(self, k) < 0):
                 bad(k, "has negative values, expected >= 0")
         if b:
-            if np.any((self.bond_i < 0) | (self.bond_j >= n) | (self.bond_j < 0) | (self.bond_i >= n)):
+            ends = np.concatenate([self.bond_i, self.bond_j])
+            if np.any((ends < 0) | (ends >= n)):
                 bad("bond_i", f"references particles outside 0..{n - 1}")
             if np.any(self.bond_i >= self.bond_j):
                 bad("bond_i", "is not < bond_j for every bond, expected i < j")
@@ -223,18 +224,7 @@ class Specimen:
     def save(self, path) -> None:
         """Write ``specimen.npz`` atomically (temporary file, then rename)."""
         self.validate(str(path))
-        path = os.fspath(path)
-        d = os.path.dirname(os.path.abspath(path))
-        os.makedirs(d, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(suffix=".npz", dir=d)
-        os.close(fd)
-        try:
-            np.savez_compressed(tmp, **self.to_arrays())
-            os.replace(tmp, path)
-        except BaseException:
-            if os.path.exists(tmp):
-                os.remove(tmp)
-            raise
+        save_npz_atomic(path, self.to_arrays(), compressed=True)
 
     @classmethod
     def load(cls, path) -> "Specimen":

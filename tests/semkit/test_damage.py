@@ -3,7 +3,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from semkit.damage import damage_table, flag_outliers, image_damage, plot_p_by_stage, p_status
+from semkit.damage import damage_table, flag_outliers, image_damage, p_status, plot_p_by_stage
 from semkit.errors import InputError
 
 # Thesis Table 3-3: per-image P by test and stage

@@ -33,7 +33,8 @@ def test_hand_written_minimal_file_loads(tmp_path):
     """DESIGN.md §4: particle, mineral-table, bond and box keys only -> loads, no grains."""
     s = Specimen.lattice(nx=3, ny=2, radius=1e-3)
     keep = ["x", "y", "r", "mineral", "mineral_names", "density", "emod", "kratio", "fric",
-            "pb_emod", "pb_kratio", "pb_ten", "pb_coh", "pb_fa", "pb_rmul", "bond_i", "bond_j", "box"]
+            "pb_emod", "pb_kratio", "pb_ten", "pb_coh", "pb_fa", "pb_rmul",
+            "bond_i", "bond_j", "box"]
     p = tmp_path / "min.npz"
     np.savez(p, **{k: getattr(s, k) for k in keep})
     t = Specimen.load(p)
