@@ -188,7 +188,7 @@ def run_ucs(specimen, *, strain_rate: float | None = None,
     speed = None
     if adaptive:
         rule = adaptive if isinstance(adaptive, dict) else {}
-        speed = ld.AdaptiveSpeed(n_bonds=int(specimen.n_bonds), **rule)
+        speed = ld.AdaptiveSpeed(**rule)
 
     def on_chunk(k):
         f = min(1.0, (k + 1) / max(1, ramp_records)) * loop.factor

@@ -57,7 +57,7 @@ def _rows(stress, cracks, ke=1e-9, se=1.0, de=2e-5):
 
 
 def test_adaptive_speed_rises_while_elastic_and_drops_on_cracks_softening_and_peak():
-    sp = ld.AdaptiveSpeed(n_bonds=2000)
+    sp = ld.AdaptiveSpeed()
     assert sp.f_max == 16.0 and ld.ADAPTIVE_BASE_VELOCITY == 0.00625
     lin = [float(i) for i in range(20)]
     f = [sp.update(_rows(lin[:n], [0] * n)) for n in range(1, 15)]
@@ -65,24 +65,24 @@ def test_adaptive_speed_rises_while_elastic_and_drops_on_cracks_softening_and_pe
     assert f[:4] == [1.0] * 4
     assert f[4:9] == pytest.approx([1.5, 2.25, 3.375, 5.0625, 7.59375])
     assert f[11] == 16.0 and max(f) == 16.0
-    # one crack per 1000 bonds in the last record: target 1 + 15 exp(-2)
-    sp2 = ld.AdaptiveSpeed(n_bonds=2000, factor=16.0)
+    # two new cracks in the last record: target 1 + 15 exp(-2)
+    sp2 = ld.AdaptiveSpeed(factor=16.0)
     assert sp2.update(_rows(lin[:12], [0] * 10 + [0, 2])) == pytest.approx(1 + 15 * np.exp(-2))
     # softening: tangent at half of the largest seen -> base speed
-    sp3 = ld.AdaptiveSpeed(n_bonds=2000, factor=16.0)
+    sp3 = ld.AdaptiveSpeed(factor=16.0)
     soft = lin[:10] + [9.5, 10.0, 10.5]
     assert sp3.update(_rows(soft[:10], [0] * 10)) == 16.0
     assert sp3.update(_rows(soft, [0] * 13)) == 1.0
     # after the peak (stress below 0.995 x the running maximum) -> base speed
-    sp4 = ld.AdaptiveSpeed(n_bonds=2000, factor=16.0)
+    sp4 = ld.AdaptiveSpeed(factor=16.0)
     assert sp4.update(_rows(lin[:10] + [8.9], [0] * 11)) == 1.0
 
 
 def test_adaptive_speed_kinetic_energy_cap():
     """KE/SE = 4 x ke_ratio caps the factor at half of the current one (KE grows as v^2)."""
-    sp = ld.AdaptiveSpeed(n_bonds=2000, factor=8.0)
+    sp = ld.AdaptiveSpeed(factor=8.0)
     lin = [float(i) for i in range(12)]
     assert sp.update(_rows(lin, [0] * 12, ke=4e-3, se=1.0)) == pytest.approx(4.0)
     # never below the base speed
-    sp = ld.AdaptiveSpeed(n_bonds=2000, factor=1.5)
+    sp = ld.AdaptiveSpeed(factor=1.5)
     assert sp.update(_rows(lin, [0] * 12, ke=1.0, se=1.0)) == 1.0
