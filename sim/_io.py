@@ -1,4 +1,4 @@
-"""Atomic file writes for :mod:`sim` (temporary file in the target folder, fsync, rename)."""
+"""Atomic file writes for :mod:`sim` (temporary file in the target folder, then rename)."""
 from __future__ import annotations
 
 import os
@@ -7,16 +7,17 @@ import tempfile
 import numpy as np
 
 
-def save_npz_atomic(path, arrays: dict, *, compressed: bool = False) -> str:
-    """Write ``arrays`` to ``path`` as ``.npz`` so that a reader never sees a partial file.
+def write_atomic(path, write, *, fsync: bool = False) -> str:
+    """Create ``path`` through ``write(tmp_path)`` so that a reader never sees a partial file.
 
     Parameters
     ----------
     path : str or path-like
         Destination; its folder is created.
-    arrays : dict of str -> ndarray
-        Saved with ``np.savez`` (``np.savez_compressed`` when ``compressed``); no pickles.
-    compressed : bool
+    write : callable
+        ``write(tmp_path)`` writes the whole file at ``tmp_path`` (same folder and suffix).
+    fsync : bool
+        Flush the data to disk before the rename (checkpoints).
 
     Returns
     -------
@@ -25,22 +26,44 @@ def save_npz_atomic(path, arrays: dict, *, compressed: bool = False) -> str:
 
     Notes
     -----
-    The data go to a temporary file beside ``path``, are flushed and fsynced, and the file is
-    renamed over ``path`` (``os.replace`` is atomic on POSIX). On any error, including
-    KeyboardInterrupt, the temporary file is removed and ``path`` is left as it was.
+    ``os.replace`` is atomic on POSIX. On any error, including KeyboardInterrupt, the temporary
+    file is removed and ``path`` is left as it was.
     """
     path = os.fspath(path)
     folder = os.path.dirname(os.path.abspath(path))
     os.makedirs(folder, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(suffix=".npz.tmp", dir=folder)
+    fd, tmp = tempfile.mkstemp(suffix=os.path.splitext(path)[1], prefix=".tmp-", dir=folder)
+    os.close(fd)
     try:
-        with os.fdopen(fd, "wb") as f:
-            (np.savez_compressed if compressed else np.savez)(f, **arrays)
-            f.flush()
-            os.fsync(f.fileno())
+        write(tmp)
+        if fsync:
+            with open(tmp, "rb+") as f:
+                os.fsync(f.fileno())
         os.replace(tmp, path)
     except BaseException:
         if os.path.exists(tmp):
             os.remove(tmp)
         raise
     return path
+
+
+def save_npz_atomic(path, arrays: dict, *, compressed: bool = False, fsync: bool = True) -> str:
+    """Write ``arrays`` to ``path`` as ``.npz`` (no pickles) with :func:`write_atomic`.
+
+    Parameters
+    ----------
+    path : str or path-like
+    arrays : dict of str -> ndarray
+    compressed : bool
+        ``np.savez_compressed`` instead of ``np.savez``.
+    fsync : bool
+
+    Returns
+    -------
+    path : str
+    """
+    def write(tmp):
+        with open(tmp, "wb") as f:
+            (np.savez_compressed if compressed else np.savez)(f, **arrays)
+
+    return write_atomic(path, write, fsync=fsync)

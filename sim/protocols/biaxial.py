@@ -177,9 +177,4 @@ def run_biaxial(specimen, *, confinement: float = DEFAULT_CONFINEMENT,
             res.write(out, figures=figures)
         return res
 
-    try:
-        loop.run()
-    except KeyboardInterrupt:
-        finish()
-        raise
-    return finish()
+    return ld.run_and_finish(loop, finish)

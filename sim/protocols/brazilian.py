@@ -227,9 +227,4 @@ def run_brazilian(specimen, *, cut: bool = True, diameter=None,
             res.write(out, figures=figures)
         return res
 
-    try:
-        loop.run()
-    except KeyboardInterrupt:
-        finish()
-        raise
-    return finish()
+    return ld.run_and_finish(loop, finish)

@@ -533,3 +533,29 @@ class LoadingLoop:
             if bar is not None:
                 bar.close()
         return self
+
+
+def run_and_finish(loop, finish):
+    """Run ``loop`` and return ``finish()``; on Ctrl-C call ``finish()`` (partial outputs) first.
+
+    Parameters
+    ----------
+    loop : LoadingLoop
+    finish : callable
+        Builds (and, with ``out``, writes) the test's result from what was recorded.
+
+    Returns
+    -------
+    result : TestResult
+
+    Raises
+    ------
+    KeyboardInterrupt
+        Re-raised after ``finish()`` has written the partial results.
+    """
+    try:
+        loop.run()
+    except KeyboardInterrupt:
+        finish()
+        raise
+    return finish()

@@ -8,9 +8,10 @@ from __future__ import annotations
 import json
 import math
 import os
-import tempfile
 
 import numpy as np
+
+from .._io import write_atomic
 
 __all__ = ["HISTORY_COLUMNS", "CRACK_COLUMNS", "write_text_atomic", "write_json_atomic",
            "write_csv_atomic", "write_results", "plot_history", "plot_crack_map",
@@ -29,29 +30,12 @@ _KIND_COLOURS = {"pb_tension": "#d62728", "pb_shear": "#1f77b4",
                  "sj_tension": "#ff7f0e", "sj_shear": "#2ca02c"}
 
 
-def _atomic(path, write):
-    path = os.fspath(path)
-    d = os.path.dirname(os.path.abspath(path))
-    os.makedirs(d, exist_ok=True)
-    suffix = os.path.splitext(path)[1]
-    fd, tmp = tempfile.mkstemp(suffix=suffix, prefix=".tmp-", dir=d)
-    os.close(fd)
-    try:
-        write(tmp)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.remove(tmp)
-        raise
-    return path
-
-
 def write_text_atomic(path, text: str) -> str:
     """Write ``text`` to ``path`` atomically; returns the path."""
     def w(tmp):
         with open(tmp, "w", encoding="utf-8") as f:
             f.write(text)
-    return _atomic(path, w)
+    return write_atomic(path, w)
 
 
 def json_ready(obj):
@@ -82,7 +66,7 @@ def write_json_atomic(path, obj) -> str:
 
 def write_csv_atomic(path, frame) -> str:
     """Write a pandas DataFrame as CSV (no index) atomically."""
-    return _atomic(path, lambda tmp: frame.to_csv(tmp, index=False))
+    return write_atomic(path, lambda tmp: frame.to_csv(tmp, index=False))
 
 
 def write_results(out_dir, *, summary: dict, history=None, cracks=None) -> dict:
@@ -112,7 +96,7 @@ def write_results(out_dir, *, summary: dict, history=None, cracks=None) -> dict:
 def _save_figure(fig, path):
     import matplotlib.pyplot as plt
     try:
-        _atomic(path, lambda tmp: fig.savefig(tmp, dpi=130, format="png"))
+        write_atomic(path, lambda tmp: fig.savefig(tmp, dpi=130, format="png"))
     finally:
         plt.close(fig)
     return os.fspath(path)

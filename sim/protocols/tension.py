@@ -151,9 +151,4 @@ def run_tension(specimen, *, strain_rate: float | None = None,
             res.write(out, figures=figures)
         return res
 
-    try:
-        loop.run()
-    except KeyboardInterrupt:
-        finish()
-        raise
-    return finish()
+    return ld.run_and_finish(loop, finish)

@@ -247,9 +247,4 @@ def run_ucs(specimen, *, strain_rate: float | None = None,
         if int(sim.step) != int(loop.rows[-1]["step"]):     # checkpoint inside a chunk
             loop.steps += int(sim.step) - int(loop.rows[-1]["step"])
             loop.rows.append(record())
-    try:
-        loop.run()
-    except KeyboardInterrupt:
-        finish()
-        raise
-    return finish()
+    return ld.run_and_finish(loop, finish)
