@@ -49,6 +49,24 @@ def _grid(x, y, n, h):
     return cell, head, items, ncx, ncy
 
 
+@njit(inline="always")
+def _is_candidate(i, j, x, y, r, skin, sj_ptr, sj_adj):
+    """True when ``i``–``j`` is within the Verlet skin and is not a smooth-joint pair.
+
+    Inlined into both passes of :func:`build_contacts` (count, then fill), so the two passes
+    cannot disagree about which pairs exist.
+    """
+    dx = x[j] - x[i]
+    dy = y[j] - y[i]
+    lim = r[i] + r[j] + skin
+    if dx * dx + dy * dy >= lim * lim:
+        return False
+    for s in range(sj_ptr[i], sj_ptr[i + 1]):
+        if sj_adj[s] == j:
+            return False
+    return True
+
+
 @njit(parallel=True)
 def build_contacts(x, y, r, skin, sj_ptr, sj_adj, old_start, old_cj, old_fs, cstart, ci, cj,
                    fs, nchunks):
@@ -99,16 +117,8 @@ def build_contacts(x, y, r, skin, sj_ptr, sj_adj, old_start, old_cj, old_fs, cst
                         j = items[q]
                         if j <= i:
                             continue
-                        dx = x[j] - x[i]
-                        dy = y[j] - y[i]
-                        lim = r[i] + r[j] + skin
-                        if dx * dx + dy * dy < lim * lim:
-                            excl = False
-                            for s in range(sj_ptr[i], sj_ptr[i + 1]):
-                                if sj_adj[s] == j:
-                                    excl = True
-                            if not excl:
-                                k += 1
+                        if _is_candidate(i, j, x, y, r, skin, sj_ptr, sj_adj):
+                            k += 1
             cnt[i] = k
     cstart[0] = 0
     for i in range(n):
@@ -137,24 +147,16 @@ def build_contacts(x, y, r, skin, sj_ptr, sj_adj, old_start, old_cj, old_fs, cst
                         j = items[q]
                         if j <= i:
                             continue
-                        dx = x[j] - x[i]
-                        dy = y[j] - y[i]
-                        lim = r[i] + r[j] + skin
-                        if dx * dx + dy * dy < lim * lim:
-                            excl = False
-                            for s in range(sj_ptr[i], sj_ptr[i + 1]):
-                                if sj_adj[s] == j:
-                                    excl = True
-                            if not excl:
-                                ci[k] = i
-                                cj[k] = j
-                                f = 0.0
-                                for o in range(old_start[i], old_start[i + 1]):
-                                    if old_cj[o] == j:
-                                        f = old_fs[o]
-                                        break
-                                fs[k] = f
-                                k += 1
+                        if _is_candidate(i, j, x, y, r, skin, sj_ptr, sj_adj):
+                            ci[k] = i
+                            cj[k] = j
+                            f = 0.0
+                            for o in range(old_start[i], old_start[i + 1]):
+                                if old_cj[o] == j:
+                                    f = old_fs[o]
+                                    break
+                            fs[k] = f
+                            k += 1
     return total
 
 
