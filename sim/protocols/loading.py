@@ -426,6 +426,9 @@ class LoadingLoop:
         chunk is ``chunk / factor`` steps (records stay equally spaced in strain).
     checkpoint : path, optional
         Where ``sim.save`` writes on Ctrl-C (and every ``checkpoint_every`` records).
+    on_checkpoint : callable, optional
+        Called after each periodic checkpoint (the protocol writes its partial history and
+        summary there, so that a run killed without Ctrl-C can be resumed).
     progress : bool
         tqdm progress bar on stderr.
     """
@@ -440,6 +443,7 @@ class LoadingLoop:
     on_chunk: object = None
     checkpoint: object = None
     checkpoint_every: int = 0
+    on_checkpoint: object = None
     speed: object = None
     factor: float = 1.0
     progress: bool = True
@@ -473,7 +477,7 @@ class LoadingLoop:
             from tqdm import tqdm
             bar = tqdm(total=self.max_steps, desc=self.desc, unit="step", leave=False,
                        dynamic_ncols=True, mininterval=0.5)
-        t0 = time.perf_counter()
+        t0, wall_before = time.perf_counter(), self.wall_s
         strain, stress = [], []
         if not self.rows:
             self.rows.append(self.record())
@@ -503,6 +507,9 @@ class LoadingLoop:
                                         f"speed=x{self.factor:.2f}")
                 if self.checkpoint_every and k % self.checkpoint_every == 0:
                     self.save_checkpoint()
+                    if self.on_checkpoint is not None:
+                        self.wall_s = wall_before + time.perf_counter() - t0
+                        self.on_checkpoint()
                 why = self.stop.reason(strain, stress, row.get("cracks_total"))
                 if why:
                     self.stop_reason = why
@@ -529,7 +536,7 @@ class LoadingLoop:
                 signal.signal(signal.SIGINT, prev)
             raise
         finally:
-            self.wall_s += time.perf_counter() - t0
+            self.wall_s = wall_before + time.perf_counter() - t0
             if bar is not None:
                 bar.close()
         return self

@@ -32,7 +32,8 @@ def base_summary(test: str, specimen, loop, sim, options: dict) -> dict:
     steps = int(loop.steps)
     return {"test": test, "specimen": dict(specimen.meta),
             "n_particles": n, "n_bonds": specimen.n_bonds,
-            "status": "interrupted" if loop.interrupted else "complete",
+            "status": ("interrupted" if loop.interrupted else
+                       "complete" if loop.stop_reason else "running"),
             "stop_reason": loop.stop_reason, "steps": steps,
             "engine_error": loop.engine_error or None,
             "dt_s": float(getattr(sim, "dt", float("nan"))),

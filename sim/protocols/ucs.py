@@ -122,7 +122,8 @@ def run_ucs(specimen, *, strain_rate: float | None = None,
     figures : bool
         Also draw stress_strain.png and crack_map.png when writing ``out``.
     checkpoint_every : int
-        Also checkpoint every this many records (0: only on Ctrl-C).
+        Also checkpoint every this many records (0: only on Ctrl-C), with the partial
+        ``history.csv``, ``cracks.csv`` and ``summary.json`` (status ``running``) beside it.
     adaptive : bool, optional
         Adaptive platen speed (:class:`sim.protocols.loading.AdaptiveSpeed`): up to
         16 x the base speed while elastic and crack-free (capped by a kinetic/strain energy
@@ -225,7 +226,7 @@ def run_ucs(specimen, *, strain_rate: float | None = None,
                           checkpoint_every=checkpoint_every,
                           checkpoint=None if out is None else f"{out}/checkpoint.npz")
 
-    def finish():
+    def finish(figures=figures):
         hist = loop.history()
         cracks = ld.crack_frame(sim)
         summary = base_summary("ucs", specimen, loop, sim, options)
@@ -237,6 +238,11 @@ def run_ucs(specimen, *, strain_rate: float | None = None,
         if out is not None:
             res.write(out, figures=figures)
         return res
+
+    if out is not None and checkpoint_every:
+        # the partial history and summary beside every periodic checkpoint: a run killed
+        # without Ctrl-C (SIGKILL, power loss) resumes from the last one
+        loop.on_checkpoint = lambda: finish(figures=False)
 
     if resume:
         loop.rows = prev["rows"]

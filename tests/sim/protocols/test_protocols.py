@@ -322,3 +322,38 @@ def test_ucs_interrupted_and_resumed_gives_the_uninterrupted_result(rock, tmp_pa
                                   ref.history[cols].reset_index(drop=True), rtol=1e-12)
     with pytest.raises(FileNotFoundError, match="cannot resume"):
         run_ucs(rock, strain_rate=RATE, progress=False, out=tmp_path / "none", resume=True)
+
+
+def test_ucs_killed_after_a_periodic_checkpoint_resumes_to_the_uninterrupted_result(
+        rock, tmp_path, monkeypatch):
+    """``checkpoint_every`` writes history.csv and summary.json (status running) beside each
+    checkpoint, so a run killed without Ctrl-C (no partial outputs of its own) resumes from the
+    last checkpoint and ends with the uninterrupted records and summary."""
+    from sim.protocols.report import TestResult
+    ref = run_ucs(rock, strain_rate=RATE, progress=False, out=tmp_path / "ref", figures=False)
+    orig = TestResult.write
+    calls = []
+
+    def write(self, out, **kw):
+        files = orig(self, out, **kw)
+        if self.summary["status"] == "running":
+            calls.append(self.summary["steps"])
+            if len(calls) == 2:
+                raise SystemExit("killed")       # like SIGKILL: nothing more is written
+        return files
+
+    monkeypatch.setattr(TestResult, "write", write)
+    out = tmp_path / "run"
+    with pytest.raises(SystemExit):
+        run_ucs(rock, strain_rate=RATE, progress=False, out=out, figures=False,
+                checkpoint_every=3)
+    part = json.loads((out / "summary.json").read_text())
+    assert part["status"] == "running" and part["steps"] == calls[-1] > 0
+    assert len(pd.read_csv(out / "history.csv")) == 7           # records 0..6
+    monkeypatch.setattr(TestResult, "write", orig)
+    res = run_ucs(rock, strain_rate=RATE, progress=False, out=out, figures=False, resume=True)
+    a, b = ref.summary, res.summary
+    assert b["status"] == "complete" and b["steps"] == a["steps"]
+    for k in ("ucs_mpa", "E_gpa", "nu", "peak_axial_strain"):
+        assert b[k] == pytest.approx(a[k], rel=1e-12, abs=1e-12), k
+    assert b["cracks"] == a["cracks"]
