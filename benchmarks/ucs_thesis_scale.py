@@ -6,6 +6,11 @@ wall time (the issue's target: <= 10 minutes on the 2-core machine; PFC took 1-2
 strain and the strain at the stop measured on small specimens (``--stop-strain``).
 
     python benchmarks/ucs_thesis_scale.py --specimen S.npz --out benchmarks/results
+
+``--mode`` as benchmarks/ucs_adaptive.py (``adaptive``: the default size-aware rule;
+``adaptive:VBASE:FMAX``; ``const:V``), e.g. a reference at half the default cracking rate on a
+25 x 50 mm specimen: ``--mode adaptive:0.01953125:5.12 --name half``. The machine load (1-min
+average) before and after the run is recorded beside the wall time.
 """
 from __future__ import annotations
 
@@ -47,6 +52,20 @@ def _probe(spec, a):
     return 0
 
 
+def _mode_options(mode):
+    if mode.startswith("const:"):
+        return dict(platen_velocity=float(mode.split(":")[1]), adaptive=False)
+    parts = mode.split(":")
+    if parts[0] != "adaptive":
+        raise ValueError(f"--mode {mode!r}: expected adaptive[:VBASE[:FMAX]] or const:V")
+    kw = dict(adaptive=True)
+    if len(parts) > 1:
+        kw["platen_velocity"] = float(parts[1])
+    if len(parts) > 2:
+        kw["adaptive"] = {"f_max": float(parts[2])}
+    return kw
+
+
 def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--specimen", default=None, help="default: built with gbmgen (seed 1)")
@@ -59,6 +78,10 @@ def main(argv=None):
     p.add_argument("--probe-steps", type=int, default=0,
                    help="only time this many loading steps (platens moving) and extrapolate "
                         "the full run from the steps it needs at the default speed")
+    p.add_argument("--params", default=None,
+                   help="parameter YAML (default: thesis Ch. 4 start parameters)")
+    p.add_argument("--mode", default=None, help="loading mode (default: the protocol's)")
+    p.add_argument("--name", default="ucs_thesis_scale", help="output file stem")
     p.add_argument("--out", default="benchmarks/results")
     p.add_argument("--run-out", default=None,
                    help="also write the test's outputs (summary.json, history.csv, ...) there; "
@@ -66,7 +89,7 @@ def main(argv=None):
                         "JSON reports the partial run")
     a = p.parse_args(argv)
     from sim import Specimen
-    from sim.protocols.parameters import apply_parameters, start_parameters
+    from sim.protocols.parameters import apply_parameters, load_parameters, start_parameters
     from sim.protocols.ucs import run_ucs
     if a.specimen:
         spec = Specimen.load(a.specimen)
@@ -78,8 +101,11 @@ def main(argv=None):
                                         "table_4_1.csv"))
         spec, _ = build_specimen(table, width_mm=25.0, height_mm=50.0, scenario=1,
                                  particle_radius_mm=0.1, seed=1)
-    spec = apply_parameters(spec, start_parameters(spec))
+    spec = apply_parameters(spec, load_parameters(a.params) if a.params
+                            else start_parameters(spec))
     kw = {}
+    if a.mode:
+        kw.update(_mode_options(a.mode))
     if a.platen_velocity:
         kw["platen_velocity"] = a.platen_velocity
     if a.timestep_factor:
@@ -88,6 +114,7 @@ def main(argv=None):
         kw.update(max_strain=a.max_strain, post_peak=None)
     if a.probe_steps:
         return _probe(spec, a)
+    load_before = os.getloadavg()[0]
     t0 = time.perf_counter()
     if a.run_out:
         kw["out"] = a.run_out
@@ -124,11 +151,14 @@ def main(argv=None):
            "wall_s": wall, "loop_wall_s": s["wall_s"],
            "particle_steps_per_s": s["particle_steps_per_s"], "strain_reached": strain,
            "stop_reason": s["stop_reason"], "ucs_mpa": s.get("ucs_mpa"),
-           "E_gpa": s.get("E_gpa"), "options": s["options"],
-           "full_run_wall_s_estimate": full,
-           "note": "2-core machine shared with other engineers' jobs during the run"}
+           "E_gpa": s.get("E_gpa"), "nu": s.get("nu"), "ci_mpa": s.get("ci_mpa"),
+           "cd_mpa": s.get("cd_mpa"), "peak_axial_strain": s.get("peak_axial_strain"),
+           "cracks": s.get("cracks"), "options": s["options"], "mode": a.mode or "default",
+           "params": a.params or "start_parameters", "full_run_wall_s_estimate": full,
+           "load_1min_before_after": [load_before, os.getloadavg()[0]],
+           "numba_threads": int(os.environ.get("NUMBA_NUM_THREADS", os.cpu_count()))}
     os.makedirs(a.out, exist_ok=True)
-    with open(os.path.join(a.out, "ucs_thesis_scale.json"), "w") as f:
+    with open(os.path.join(a.out, f"{a.name}.json"), "w") as f:
         json.dump(res, f, indent=2, default=str)
     print(json.dumps(res, indent=2, default=str))
     return 0

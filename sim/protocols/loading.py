@@ -24,7 +24,8 @@ __all__ = ["DEFAULT_PLATEN_VELOCITY", "DEFAULT_TIMESTEP_FACTOR", "loading_rate",
            "make_simulation", "add_platens", "gauge_indices", "side_indices",
            "gauge_strains", "side_lateral_strain", "crack_frame", "crack_tally", "energies",
            "LoadingLoop", "StopRule", "AdaptiveSpeed", "ADAPTIVE_DEFAULT",
-           "ADAPTIVE_BASE_VELOCITY"]
+           "ADAPTIVE_BASE_VELOCITY", "ADAPTIVE_BASE_STRAIN_RATE", "ADAPTIVE_FAST_VELOCITY",
+           "adaptive_speeds"]
 
 #: Default loading speed, m/s: each platen (grip, jaw) moves at this speed, so the loading
 #: strain rate is 2 v / L. Quasi-static accuracy depends on v / c_p (the loading time to the peak
@@ -283,6 +284,36 @@ ADAPTIVE_DEFAULT = True
 #: and E within 0.32 % on three of four specimens, +2.29 % on the fourth (its reference repeat
 #: with a 10 % smaller step differs by 2.36 %; docs/labtests.md).
 ADAPTIVE_BASE_VELOCITY = 0.00625
+#: Base (cracking-phase) strain rate of the adaptive rule, 1/s: the rate of the base speed on
+#: the 8 mm specimens where it was validated (2 x 0.00625 / 0.008). Cracking is a local
+#: process (a bond break relaxes over a few particle transits, whatever the specimen size), so
+#: its error is set by the strain gained during that relaxation, i.e. by the strain rate; a
+#: longer specimen may crack at a proportionally higher platen speed
+#: (benchmarks/ucs_size_rate.py, docs/labtests.md). See :func:`adaptive_speeds`.
+ADAPTIVE_BASE_STRAIN_RATE = 2.0 * ADAPTIVE_BASE_VELOCITY / 0.008
+#: Fastest platen speed of the adaptive rule, m/s (16 x the 8 mm base speed): quasi-staticity of
+#: the elastic phase depends on v / c_p, not on the size.
+ADAPTIVE_FAST_VELOCITY = 16.0 * ADAPTIVE_BASE_VELOCITY
+
+
+def adaptive_speeds(length):
+    """Base platen speed (m/s) and largest speed factor of the adaptive rule for a specimen
+    of loaded ``length`` (m).
+
+    The base speed is the larger of :data:`ADAPTIVE_BASE_VELOCITY` and the speed that loads at
+    :data:`ADAPTIVE_BASE_STRAIN_RATE` (both platens moving); the largest factor brings the
+    fast phase to :data:`ADAPTIVE_FAST_VELOCITY` (at least 1).
+
+    Examples
+    --------
+    >>> adaptive_speeds(0.008)                 # the validated size: 0.00625 m/s, 16x
+    (0.00625, 16.0)
+    >>> v, f = adaptive_speeds(0.05)           # thesis scale: cracks at 0.039 m/s
+    >>> round(v, 6), round(f, 3)
+    (0.039062, 2.56)
+    """
+    v = max(ADAPTIVE_BASE_VELOCITY, 0.5 * ADAPTIVE_BASE_STRAIN_RATE * float(length))
+    return v, max(1.0, ADAPTIVE_FAST_VELOCITY / v)
 
 
 @dataclass

@@ -99,9 +99,11 @@ def run_ucs(specimen, *, strain_rate: float | None = None,
         Loading strain rate; default 2 ``platen_velocity`` / L (L the loaded length).
     platen_velocity : float, m/s, optional
         Speed of each platen when ``strain_rate`` is not given: the constant speed, or the
-        base (slowest) speed of the adaptive rule. Default
-        :data:`sim.protocols.loading.ADAPTIVE_BASE_VELOCITY` (0.00625) when adaptive,
-        :data:`sim.protocols.loading.DEFAULT_PLATEN_VELOCITY` (0.0125) at constant speed.
+        base (slowest) speed of the adaptive rule. Default when adaptive: the size-aware
+        base speed of :func:`sim.protocols.loading.adaptive_speeds` (0.00625 m/s up to 8 mm
+        long, then a strain rate of 1.5625/s: 0.039 m/s at 50 mm, with the fast phase capped
+        at 0.1 m/s); at constant speed
+        :data:`sim.protocols.loading.DEFAULT_PLATEN_VELOCITY` (0.0125).
         The speed is reached after a linear ramp over the first ``ramp_records`` records.
     post_peak : float or None
         Stop when the stress falls below this fraction of the peak (default 0.8).
@@ -126,8 +128,8 @@ def run_ucs(specimen, *, strain_rate: float | None = None,
         ``history.csv``, ``cracks.csv`` and ``summary.json`` (status ``running``) beside it.
     adaptive : bool, optional
         Adaptive platen speed (:class:`sim.protocols.loading.AdaptiveSpeed`): up to
-        16 x the base speed while elastic and crack-free (capped by a kinetic/strain energy
-        check), the base speed while cracking, softening and after the peak. Default
+        0.1 m/s while elastic and crack-free (capped by a kinetic/strain energy check), the
+        base speed while cracking, softening and after the peak. Default
         :data:`sim.protocols.loading.ADAPTIVE_DEFAULT` (True). A dict: adaptive, with these
         fields of :class:`~sim.protocols.loading.AdaptiveSpeed` changed (e.g. ``f_max``).
     resume : bool
@@ -155,9 +157,16 @@ def run_ucs(specimen, *, strain_rate: float | None = None,
     stop = ld.StopRule(post_peak=post_peak, max_strain=max_strain)
     if adaptive is None:
         adaptive = ld.ADAPTIVE_DEFAULT
-    if platen_velocity is None:
-        platen_velocity = ld.ADAPTIVE_BASE_VELOCITY if adaptive else ld.DEFAULT_PLATEN_VELOCITY
     specimen, _ = ld.relieve_overlaps(specimen.validate("specimen"))
+    rule = dict(adaptive) if isinstance(adaptive, dict) else {}
+    if platen_velocity is None and strain_rate is None:
+        if adaptive:        # size-aware base speed: the cracking phase at a fixed strain rate
+            platen_velocity, f_max = ld.adaptive_speeds(float(specimen.box[3] - specimen.box[2]))
+            rule.setdefault("f_max", f_max)
+        else:
+            platen_velocity = ld.DEFAULT_PLATEN_VELOCITY
+    elif platen_velocity is None:
+        platen_velocity = ld.DEFAULT_PLATEN_VELOCITY        # unused: strain_rate wins
     opts = dict(damping=damping, **(sim_options or {}))
     if timestep_factor is not None:
         opts["timestep_factor"] = timestep_factor
@@ -188,7 +197,6 @@ def run_ucs(specimen, *, strain_rate: float | None = None,
 
     speed = None
     if adaptive:
-        rule = adaptive if isinstance(adaptive, dict) else {}
         speed = ld.AdaptiveSpeed(**rule)
 
     def on_chunk(k):

@@ -86,3 +86,15 @@ def test_adaptive_speed_kinetic_energy_cap():
     # never below the base speed
     sp = ld.AdaptiveSpeed(factor=1.5)
     assert sp.update(_rows(lin, [0] * 12, ke=1.0, se=1.0)) == 1.0
+
+
+def test_adaptive_speeds_keep_the_8mm_rule_and_fix_the_cracking_strain_rate_beyond():
+    # up to 8 mm: the validated base speed and 16x; beyond: strain rate 1.5625/s, fast <= 0.1
+    assert ld.adaptive_speeds(0.004) == (0.00625, 16.0)
+    assert ld.adaptive_speeds(0.008) == (0.00625, 16.0)
+    for L in (0.02, 0.05, 0.2):
+        v, f = ld.adaptive_speeds(L)
+        assert 2 * v / L == pytest.approx(ld.ADAPTIVE_BASE_STRAIN_RATE)
+        assert v * f == pytest.approx(max(v, 0.1))
+    assert ld.adaptive_speeds(0.05)[0] == pytest.approx(0.0390625)
+    assert ld.adaptive_speeds(0.2) == (pytest.approx(0.15625), 1.0)

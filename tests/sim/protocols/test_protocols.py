@@ -357,3 +357,22 @@ def test_ucs_killed_after_a_periodic_checkpoint_resumes_to_the_uninterrupted_res
     for k in ("ucs_mpa", "E_gpa", "nu", "peak_axial_strain"):
         assert b[k] == pytest.approx(a[k], rel=1e-12, abs=1e-12), k
     assert b["cracks"] == a["cracks"]
+
+
+def test_ucs_default_speed_is_size_aware():
+    """Without a rate, the adaptive UCS takes its base speed and largest factor from the loaded
+    length (sim.protocols.loading.adaptive_speeds): 0.00625 m/s x 16 for 8 mm and shorter, a
+    fixed cracking strain rate beyond."""
+    from sim.protocols import loading as ld
+    for ny, r in ((8, 0.25e-3), (60, 0.25e-3)):
+        s = Specimen.lattice(nx=4, ny=ny, radius=r, gap=0.0, emod=60e9, pb_emod=60e9)
+        res = run_ucs(s, max_strain=1e-4, post_peak=None, progress=False, figures=False)
+        o = res.summary["options"]
+        h = s.box[3] - s.box[2]
+        v, f = ld.adaptive_speeds(h)
+        assert o["platen_velocity_m_per_s"] == pytest.approx(v, rel=1e-3)
+        assert o["adaptive_rule"]["f_max"] == pytest.approx(f, rel=1e-3)
+        if h > 0.008:
+            assert o["strain_rate_per_s"] == pytest.approx(ld.ADAPTIVE_BASE_STRAIN_RATE, rel=1e-3)
+        else:
+            assert o["platen_velocity_m_per_s"] == pytest.approx(0.00625, rel=1e-3)
