@@ -18,6 +18,31 @@ THESIS = {1: ((133.9, 136.9), (61.8, 65.5)), 2: ((189.1, 193.7), (71.0, 73.4)),
           3: ((237.0, 250.3), (76.1, 78.5)), 4: ((295.6, 314.3), (89.3, 93.4))}
 
 
+def markdown_table(rows):
+    """Markdown table of the runs, one line per (scenario, scale), beside the thesis ranges."""
+    import numpy as np
+    cases = list(dict.fromkeys((x["scenario"], x["scale"]) for x in rows))
+    cases.sort(key=lambda c: (c[1] != 1.0, c[0], c[1]))
+    lines = ["| scenario | scale | MHI (realised) | grains | joint share of bonds | "
+             "UCS MPa (mean ± sd) | E GPa (mean ± sd) | thesis UCS MPa | thesis E GPa | n |",
+             "|---|---|---|---|---|---|---|---|---|---|"]
+    for sc, scale in cases:
+        r = [x for x in rows if x["scenario"] == sc and x["scale"] == scale]
+        u = np.array([x["ucs_mpa"] for x in r])
+        e = np.array([x["E_gpa"] for x in r])
+        m = [x["mhi_realised"] for x in r if x["mhi_realised"] is not None]
+        g = np.mean([x["n_grains"] for x in r])
+        jf = [x["joint_fraction"] for x in r if "joint_fraction" in x]
+        th = THESIS.get(sc) if scale == 1.0 else None
+        lines.append(f"| S{sc} | ×{scale:g} | {np.mean(m) if m else float('nan'):.2f} | "
+                     f"{g:.0f} | {np.mean(jf) if jf else float('nan'):.2f} | "
+                     f"{u.mean():.1f} ± {u.std(ddof=1) if len(u) > 1 else 0:.1f} | "
+                     f"{e.mean():.1f} ± {e.std(ddof=1) if len(e) > 1 else 0:.1f} | "
+                     + (f"{th[0][0]}–{th[0][1]} | {th[1][0]}–{th[1][1]}" if th else "– | –")
+                     + f" | {len(r)} |")
+    return "\n".join(lines) + "\n"
+
+
 def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--params", default=None, help="parameter YAML (default start_parameters)")
@@ -30,7 +55,16 @@ def main(argv=None):
     p.add_argument("--platen-velocity", type=float, default=None)
     p.add_argument("--timestep-factor", type=float, default=None)
     p.add_argument("--out", default="benchmarks/results")
+    p.add_argument("--merge", default=None,
+                   help="comma-separated ucs_scenarios.json files: only print their joint table")
     a = p.parse_args(argv)
+    if a.merge:
+        rows = []
+        for path in a.merge.split(","):
+            with open(path) as f:
+                rows += json.load(f)
+        print(markdown_table(rows))
+        return 0
     import numpy as np
 
     import gbmgen
@@ -59,24 +93,14 @@ def main(argv=None):
             s = run_ucs(spec, progress=False, **kw).summary
             mhi = spec.meta.get("MHI_realised", spec.meta.get("mhi_realised"))
             rows.append({"scenario": sc, "scale": scale, "seed": seed,
+                         "width_mm": a.width_mm, "height_mm": a.height_mm,
                          "n_particles": spec.n_particles, "n_grains": spec.n_grains,
+                         "joint_fraction": float(np.mean(spec.bond_kind == 1)),
                          "mhi_realised": mhi, "ucs_mpa": s["ucs_mpa"], "E_gpa": s["E_gpa"],
+                         "nu": s["nu"], "cracks": s["cracks"]["total"],
                          "wall_s": time.perf_counter() - t0, "steps": s["steps"]})
             print(json.dumps(rows[-1]), flush=True)
-    lines = ["| scenario | scale | MHI (realised) | UCS MPa (mean ± sd) | E GPa (mean ± sd) | "
-             "thesis UCS MPa | thesis E GPa | n |", "|---|---|---|---|---|---|---|---|"]
-    for sc, scale in cases:
-        r = [x for x in rows if x["scenario"] == sc and x["scale"] == scale]
-        u = np.array([x["ucs_mpa"] for x in r])
-        e = np.array([x["E_gpa"] for x in r])
-        m = [x["mhi_realised"] for x in r if x["mhi_realised"] is not None]
-        th = THESIS.get(sc) if scale == 1.0 else None
-        lines.append(f"| S{sc} | ×{scale:g} | {np.mean(m) if m else float('nan'):.2f} | "
-                     f"{u.mean():.1f} ± {u.std(ddof=1) if len(u) > 1 else 0:.1f} | "
-                     f"{e.mean():.1f} ± {e.std(ddof=1) if len(e) > 1 else 0:.1f} | "
-                     + (f"{th[0][0]}–{th[0][1]} | {th[1][0]}–{th[1][1]}" if th else "– | –")
-                     + f" | {len(r)} |")
-    text = "\n".join(lines) + "\n"
+    text = markdown_table(rows)
     os.makedirs(a.out, exist_ok=True)
     with open(os.path.join(a.out, "ucs_scenarios.json"), "w") as f:
         json.dump(rows, f, indent=2)
