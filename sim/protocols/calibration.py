@@ -81,7 +81,11 @@ def report_markdown(result, targets, *, specimens=(), extra="") -> str:
             cells += [f"{e['responses'][k] / f:.4g}", f"{100 * e['errors'][k]:+.2f} %"]
         seed = "" if e["seed"] is None else str(e["seed"])
         lines.append(f"| {e['phase']} | {e['iteration']} | {seed} | " + " | ".join(cells)
-                     + f" | {e['seconds']:.1f} |")
+                     + (" | reused |" if e["phase"] == "seed" and e["seconds"] < 1e-3
+                        else f" | {e['seconds']:.1f} |"))
+    if any(e["phase"] == "seed" and e["seconds"] < 1e-3 for e in result.evaluations):
+        lines += ["", "reused: the point was already run on every specimen (a search on the "
+                  "seed mean); the runs are deterministic, so their results are reused."]
     lines += ["", "## Final", "", "| target | value | final error | seed mean | seed std | "
               "seed min | seed max |", "|---|---|---|---|---|---|---|"]
     for k in names:
