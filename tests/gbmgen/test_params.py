@@ -58,3 +58,26 @@ def test_calibration_files_load_and_literal_numbers_stay(tmp_path):
 def test_bond_stiffness_needs_the_particles():
     with pytest.raises(InputError, match="mean particle radius"):
         load_params("thesis-ch4").joint_arrays()
+
+
+def test_calibrated_preset_is_the_calibration_result():
+    """``thesis-ch4-calibrated`` holds what ``gbmsim calibrate`` wrote (6 significant digits),
+    with the joint stiffness as the 'bond' rule that it was derived from."""
+    from pathlib import Path
+
+    import yaml
+    path = (Path(__file__).resolve().parents[2] / "benchmarks" / "ucs_results"
+            / "calibration_10x20" / "calibrated_params.yaml")
+    cal = yaml.safe_load(path.read_text())
+    p = load_params("thesis-ch4-calibrated")
+    for m, fields in cal["minerals"].items():
+        for k, v in fields.items():
+            assert p.minerals[m][k] == pytest.approx(v, rel=1e-5), (m, k)
+    for k in ("sj_ten", "sj_coh", "sj_fa", "sj_fric"):
+        assert p.joint[k] == pytest.approx(cal["joint"][k], rel=1e-5), k
+    assert p.joint["sj_kn"] == "bond" and p.joint["sj_ks"] == "bond"
+    # the calibrated joint stiffness is the bond rule at the calibration packings' mean radius
+    emod = np.mean([cal["minerals"][m]["pb_emod"] for m in cal["minerals"]])
+    r_mean = emod / (2 * cal["joint"]["sj_kn"])
+    assert 0.098e-3 < r_mean < 0.1e-3
+    assert cal["joint"]["sj_ks"] == pytest.approx(cal["joint"]["sj_kn"] / 2, rel=1e-12)
