@@ -79,7 +79,7 @@ def main(argv=None):
                    help="only time this many loading steps (platens moving) and extrapolate "
                         "the full run from the steps it needs at the default speed")
     p.add_argument("--params", default=None,
-                   help="parameter YAML (default: thesis Ch. 4 start parameters)")
+                   help="parameter YAML applied to the specimen (default: the specimen's own)")
     p.add_argument("--mode", default=None, help="loading mode (default: the protocol's)")
     p.add_argument("--name", default="ucs_thesis_scale", help="output file stem")
     p.add_argument("--out", default="benchmarks/results")
@@ -89,7 +89,7 @@ def main(argv=None):
                         "JSON reports the partial run")
     a = p.parse_args(argv)
     from sim import Specimen
-    from sim.protocols.parameters import apply_parameters, load_parameters, start_parameters
+    from sim.protocols.parameters import apply_parameters, load_parameters
     from sim.protocols.ucs import run_ucs
     if a.specimen:
         spec = Specimen.load(a.specimen)
@@ -101,8 +101,8 @@ def main(argv=None):
                                         "table_4_1.csv"))
         spec, _ = build_specimen(table, width_mm=25.0, height_mm=50.0, scenario=1,
                                  particle_radius_mm=0.1, seed=1)
-    spec = apply_parameters(spec, load_parameters(a.params) if a.params
-                            else start_parameters(spec))
+    if a.params:
+        spec = apply_parameters(spec, load_parameters(a.params))
     kw = {}
     if a.mode:
         kw.update(_mode_options(a.mode))
@@ -154,7 +154,7 @@ def main(argv=None):
            "E_gpa": s.get("E_gpa"), "nu": s.get("nu"), "ci_mpa": s.get("ci_mpa"),
            "cd_mpa": s.get("cd_mpa"), "peak_axial_strain": s.get("peak_axial_strain"),
            "cracks": s.get("cracks"), "options": s["options"], "mode": a.mode or "default",
-           "params": a.params or "start_parameters", "full_run_wall_s_estimate": full,
+           "params": a.params or "specimen's own", "full_run_wall_s_estimate": full,
            "load_1min_before_after": [load_before, os.getloadavg()[0]],
            "numba_threads": int(os.environ.get("NUMBA_NUM_THREADS", os.cpu_count()))}
     os.makedirs(a.out, exist_ok=True)
