@@ -51,7 +51,10 @@ def main(argv=None):
     p.add_argument("--particle-radius-mm", type=float, default=0.1)
     p.add_argument("--seeds", default="1,2")
     p.add_argument("--scenarios", default="1,2,3,4")
-    p.add_argument("--scales", default="1.0,1.5", help="grain-size factors run for scenario 1")
+    p.add_argument("--scales", default="1.0,1.5",
+                   help="grain-size factors run for the --scale-scenarios")
+    p.add_argument("--scale-scenarios", default="1",
+                   help="scenarios run with the --scales (default 1)")
     p.add_argument("--platen-velocity", type=float, default=None)
     p.add_argument("--timestep-factor", type=float, default=None)
     p.add_argument("--out", default="benchmarks/results")
@@ -79,8 +82,9 @@ def main(argv=None):
         kw["platen_velocity"] = a.platen_velocity
     if a.timestep_factor:
         kw["timestep_factor"] = a.timestep_factor
-    cases = [(sc, 1.0) for sc in map(int, a.scenarios.split(","))]
-    cases += [(1, float(s)) for s in a.scales.split(",") if float(s) != 1.0]
+    cases = [(sc, 1.0) for sc in map(int, a.scenarios.split(",")) if sc]
+    cases += [(sc, float(s)) for sc in map(int, a.scale_scenarios.split(","))
+              for s in a.scales.split(",") if float(s) != 1.0]
     rows = []
     for sc, scale in cases:
         for seed in map(int, a.seeds.split(",")):

@@ -36,6 +36,9 @@ def write_atomic(path, write, *, fsync: bool = False) -> str:
     os.close(fd)
     try:
         write(tmp)
+        umask = os.umask(0)         # mkstemp makes 0600; results are meant to be shared
+        os.umask(umask)
+        os.chmod(tmp, 0o666 & ~umask)
         if fsync:
             with open(tmp, "rb+") as f:
                 os.fsync(f.fileno())

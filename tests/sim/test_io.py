@@ -28,3 +28,16 @@ def test_npz_round_trip(tmp_path, compressed):
         np.testing.assert_array_equal(z["x"], a["x"])
         assert str(z["s"]) == "meta"
     assert sorted(x.name for x in (tmp_path / "sub").iterdir()) == ["c.npz"]
+
+
+def test_write_atomic_gives_the_permissions_of_a_plain_file(tmp_path):
+    """mkstemp creates 0600 files; results written through it follow the umask like open()."""
+    import os
+    old = os.umask(0o022)
+    try:
+        p = write_atomic(tmp_path / "a.txt", lambda t: open(t, "w").write("x"))
+        with open(tmp_path / "b.txt", "w") as f:
+            f.write("x")
+    finally:
+        os.umask(old)
+    assert os.stat(p).st_mode & 0o777 == os.stat(tmp_path / "b.txt").st_mode & 0o777 == 0o644
