@@ -39,7 +39,8 @@ def _common(p, *, rate=True):
                    help="safety factor on the critical time step "
                         f"(default {DEFAULT_TIMESTEP_FACTOR}, from the convergence study)")
     p.add_argument("--checkpoint-every", type=int, default=0,
-                   help="also write checkpoint.npz every N records (always on Ctrl-C)")
+                   help="also write checkpoint.npz and the partial results every N "
+                        "records (always on Ctrl-C); --resume continues from them")
     p.add_argument("--no-figures", action="store_true", help="skip the PNG figures")
     p.add_argument("--no-progress", action="store_true", help="no tqdm progress bar")
 
@@ -57,12 +58,13 @@ def register(subparsers):
         if name == "ucs":
             p.add_argument("--adaptive", dest="adaptive", action="store_true", default=None,
                            help="adaptive platen speed (the default unless --platen-velocity "
-                                "or --strain-rate is given): up to 16x the base speed "
-                                "(0.00625 m/s) while "
-                                "elastic and crack-free, the base speed when cracking, "
-                                "softening and post-peak (docs/labtests.md)")
+                                "or --strain-rate is given): up to 0.1 m/s while elastic and "
+                                "crack-free, the base speed when cracking, softening and "
+                                "post-peak: 0.00625 m/s up to 8 mm long, a strain rate of "
+                                "1.5625/s beyond; with --platen-velocity V: base V, up to 16 V "
+                                "(docs/labtests.md)")
             p.add_argument("--constant-speed", dest="adaptive", action="store_false",
-                           help="constant platen speed (the base speed throughout)")
+                           help="constant platen speed (--platen-velocity, default 0.0125 m/s)")
             p.add_argument("--resume", action="store_true",
                            help="continue an interrupted test from --out (checkpoint.npz, "
                                 "history.csv, summary.json written on Ctrl-C); same specimen "
