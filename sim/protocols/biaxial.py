@@ -152,7 +152,7 @@ def run_biaxial(specimen, *, confinement: float = DEFAULT_CONFINEMENT,
                           checkpoint_every=checkpoint_every,
                           checkpoint=None if out is None else f"{out}/checkpoint.npz")
 
-    def finish():
+    def finish(figures=figures):
         hist = loop.history()
         cracks = ld.crack_frame(sim)
         summary = base_summary("biaxial", specimen, loop, sim, options)

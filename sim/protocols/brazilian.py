@@ -208,7 +208,7 @@ def run_brazilian(specimen, *, cut: bool = True, diameter=None,
                           checkpoint_every=checkpoint_every,
                           checkpoint=None if out is None else f"{out}/checkpoint.npz")
 
-    def finish():
+    def finish(figures=figures):
         hist = loop.history()
         cracks = ld.crack_frame(sim)
         summary = base_summary("brazilian", disc, loop, sim, options)

@@ -40,7 +40,7 @@ def _common(p, *, rate=True):
                         f"(default {DEFAULT_TIMESTEP_FACTOR}, from the convergence study)")
     p.add_argument("--checkpoint-every", type=int, default=0,
                    help="also write checkpoint.npz and the partial results every N "
-                        "records (always on Ctrl-C); --resume continues from them")
+                        "records (always on Ctrl-C); ucs --resume continues from them")
     p.add_argument("--no-figures", action="store_true", help="skip the PNG figures")
     p.add_argument("--no-progress", action="store_true", help="no tqdm progress bar")
 

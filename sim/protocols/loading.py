@@ -580,7 +580,11 @@ def run_and_finish(loop, finish):
     ----------
     loop : LoadingLoop
     finish : callable
-        Builds (and, with ``out``, writes) the test's result from what was recorded.
+        ``finish(figures=...)`` builds (and, with ``out``, writes) the test's result from what
+        was recorded. With periodic checkpoints (``loop.checkpoint_every``) it is also called
+        after each of them with ``figures=False``: the partial history and summary (status
+        ``running``) lie beside every checkpoint, so a run killed without Ctrl-C (SIGKILL, power
+        loss) leaves results, and a UCS can be resumed.
 
     Returns
     -------
@@ -591,6 +595,8 @@ def run_and_finish(loop, finish):
     KeyboardInterrupt
         Re-raised after ``finish()`` has written the partial results.
     """
+    if loop.checkpoint_every and loop.checkpoint is not None and loop.on_checkpoint is None:
+        loop.on_checkpoint = lambda: finish(figures=False)
     try:
         loop.run()
     except KeyboardInterrupt:

@@ -130,7 +130,7 @@ def run_tension(specimen, *, strain_rate: float | None = None,
                           checkpoint_every=checkpoint_every,
                           checkpoint=None if out is None else f"{out}/checkpoint.npz")
 
-    def finish():
+    def finish(figures=figures):
         hist = loop.history()
         cracks = ld.crack_frame(sim)
         summary = base_summary("tension", specimen, loop, sim, options)

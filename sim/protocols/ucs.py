@@ -247,11 +247,6 @@ def run_ucs(specimen, *, strain_rate: float | None = None,
             res.write(out, figures=figures)
         return res
 
-    if out is not None and checkpoint_every:
-        # the partial history and summary beside every periodic checkpoint: a run killed
-        # without Ctrl-C (SIGKILL, power loss) resumes from the last one
-        loop.on_checkpoint = lambda: finish(figures=False)
-
     if resume:
         loop.rows = prev["rows"]
         loop.steps, loop.wall_s = prev["steps"], prev["wall_s"]

@@ -376,3 +376,28 @@ def test_ucs_default_speed_is_size_aware():
             assert o["strain_rate_per_s"] == pytest.approx(ld.ADAPTIVE_BASE_STRAIN_RATE, rel=1e-3)
         else:
             assert o["platen_velocity_m_per_s"] == pytest.approx(0.00625, rel=1e-3)
+
+
+@pytest.mark.parametrize("test", ["tension", "brazilian", "biaxial"])
+def test_periodic_checkpoints_leave_partial_results_in_every_protocol(rock, tmp_path,
+                                                                       monkeypatch, test):
+    """A run killed right after a periodic checkpoint (no Ctrl-C handler runs) leaves
+    checkpoint.npz with history.csv, cracks.csv and summary.json (status running) beside it."""
+    from sim.protocols.report import TestResult
+    run = {"tension": run_tension, "brazilian": run_brazilian, "biaxial": run_biaxial}[test]
+    orig = TestResult.write
+
+    def write(self, out, **kw):
+        files = orig(self, out, **kw)
+        if self.summary["status"] == "running":
+            raise SystemExit("killed")
+        return files
+
+    monkeypatch.setattr(TestResult, "write", write)
+    out = tmp_path / test
+    with pytest.raises(SystemExit):
+        run(rock, strain_rate=RATE, progress=False, out=out, figures=False, checkpoint_every=2)
+    s = json.loads((out / "summary.json").read_text())
+    assert s["test"] == test and s["status"] == "running" and s["steps"] > 0
+    assert len(pd.read_csv(out / "history.csv")) == 3            # records 0, 1, 2
+    assert (out / "checkpoint.npz").exists() and (out / "cracks.csv").exists()
