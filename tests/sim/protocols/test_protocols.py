@@ -324,25 +324,32 @@ def test_ucs_interrupted_and_resumed_gives_the_uninterrupted_result(rock, tmp_pa
         run_ucs(rock, strain_rate=RATE, progress=False, out=tmp_path / "none", resume=True)
 
 
-def test_ucs_killed_after_a_periodic_checkpoint_resumes_to_the_uninterrupted_result(
-        rock, tmp_path, monkeypatch):
-    """``checkpoint_every`` writes history.csv and summary.json (status running) beside each
-    checkpoint, so a run killed without Ctrl-C (no partial outputs of its own) resumes from the
-    last checkpoint and ends with the uninterrupted records and summary."""
+def _kill_after_partial_writes(monkeypatch, n):
+    """Make the n-th periodic partial write (status running) end the run like SIGKILL: the
+    files are written, then SystemExit, so no Ctrl-C handler writes anything more.
+    Returns the list of step counts written and the original ``TestResult.write``."""
     from sim.protocols.report import TestResult
-    ref = run_ucs(rock, strain_rate=RATE, progress=False, out=tmp_path / "ref", figures=False)
-    orig = TestResult.write
-    calls = []
+    orig, calls = TestResult.write, []
 
     def write(self, out, **kw):
         files = orig(self, out, **kw)
         if self.summary["status"] == "running":
             calls.append(self.summary["steps"])
-            if len(calls) == 2:
-                raise SystemExit("killed")       # like SIGKILL: nothing more is written
+            if len(calls) == n:
+                raise SystemExit("killed")
         return files
 
     monkeypatch.setattr(TestResult, "write", write)
+    return calls, orig
+
+
+def test_ucs_killed_after_a_periodic_checkpoint_resumes_to_the_uninterrupted_result(
+        rock, tmp_path, monkeypatch):
+    """``checkpoint_every`` writes history.csv and summary.json (status running) beside each
+    checkpoint, so a run killed without Ctrl-C (no partial outputs of its own) resumes from the
+    last checkpoint and ends with the uninterrupted records and summary."""
+    ref = run_ucs(rock, strain_rate=RATE, progress=False, out=tmp_path / "ref", figures=False)
+    calls, orig = _kill_after_partial_writes(monkeypatch, 2)
     out = tmp_path / "run"
     with pytest.raises(SystemExit):
         run_ucs(rock, strain_rate=RATE, progress=False, out=out, figures=False,
@@ -350,7 +357,7 @@ def test_ucs_killed_after_a_periodic_checkpoint_resumes_to_the_uninterrupted_res
     part = json.loads((out / "summary.json").read_text())
     assert part["status"] == "running" and part["steps"] == calls[-1] > 0
     assert len(pd.read_csv(out / "history.csv")) == 7           # records 0..6
-    monkeypatch.setattr(TestResult, "write", orig)
+    monkeypatch.setattr(type(ref), "write", orig)
     res = run_ucs(rock, strain_rate=RATE, progress=False, out=out, figures=False, resume=True)
     a, b = ref.summary, res.summary
     assert b["status"] == "complete" and b["steps"] == a["steps"]
@@ -383,17 +390,8 @@ def test_periodic_checkpoints_leave_partial_results_in_every_protocol(rock, tmp_
                                                                        monkeypatch, test):
     """A run killed right after a periodic checkpoint (no Ctrl-C handler runs) leaves
     checkpoint.npz with history.csv, cracks.csv and summary.json (status running) beside it."""
-    from sim.protocols.report import TestResult
     run = {"tension": run_tension, "brazilian": run_brazilian, "biaxial": run_biaxial}[test]
-    orig = TestResult.write
-
-    def write(self, out, **kw):
-        files = orig(self, out, **kw)
-        if self.summary["status"] == "running":
-            raise SystemExit("killed")
-        return files
-
-    monkeypatch.setattr(TestResult, "write", write)
+    _kill_after_partial_writes(monkeypatch, 1)
     out = tmp_path / test
     with pytest.raises(SystemExit):
         run(rock, strain_rate=RATE, progress=False, out=out, figures=False, checkpoint_every=2)
