@@ -21,21 +21,25 @@ import os
 import time
 
 
+def mode_options(mode):
+    """``run_ucs`` keywords of a loading mode: ``const:V``, ``adaptive[:VBASE[:FMAX]]``."""
+    if mode.startswith("const:"):
+        return dict(platen_velocity=float(mode.split(":")[1]), adaptive=False)
+    parts = mode.split(":")
+    if parts[0] != "adaptive":
+        raise ValueError(f"mode {mode!r}: expected adaptive[:VBASE[:FMAX]] or const:V")
+    kw = dict(adaptive=True)
+    if len(parts) > 1:
+        kw["platen_velocity"] = float(parts[1])
+    if len(parts) > 2:
+        kw["adaptive"] = {"f_max": float(parts[2])}
+    return kw
+
+
 def run_mode(spec, mode, factor=None):
     from sim.protocols import loading as ld
     from sim.protocols.ucs import run_ucs
-    kw = {}
-    if mode.startswith("const:"):
-        kw = dict(platen_velocity=float(mode.split(":")[1]), adaptive=False)
-    elif mode.startswith("adaptive"):
-        kw = dict(adaptive=True)
-        parts = mode.split(":")
-        if len(parts) > 1:
-            kw["platen_velocity"] = float(parts[1])
-        if len(parts) > 2:
-            kw["adaptive"] = {"f_max": float(parts[2])}
-    else:
-        raise ValueError(mode)
+    kw = mode_options(mode)
     if factor is not None:
         kw["timestep_factor"] = factor
     t0 = time.perf_counter()

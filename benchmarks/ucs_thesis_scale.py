@@ -52,20 +52,6 @@ def _probe(spec, a):
     return 0
 
 
-def _mode_options(mode):
-    if mode.startswith("const:"):
-        return dict(platen_velocity=float(mode.split(":")[1]), adaptive=False)
-    parts = mode.split(":")
-    if parts[0] != "adaptive":
-        raise ValueError(f"--mode {mode!r}: expected adaptive[:VBASE[:FMAX]] or const:V")
-    kw = dict(adaptive=True)
-    if len(parts) > 1:
-        kw["platen_velocity"] = float(parts[1])
-    if len(parts) > 2:
-        kw["adaptive"] = {"f_max": float(parts[2])}
-    return kw
-
-
 def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--specimen", default=None, help="default: built with gbmgen (seed 1)")
@@ -105,7 +91,8 @@ def main(argv=None):
         spec = apply_parameters(spec, load_parameters(a.params))
     kw = {}
     if a.mode:
-        kw.update(_mode_options(a.mode))
+        from ucs_adaptive import mode_options  # this folder is on sys.path (a script)
+        kw.update(mode_options(a.mode))
     if a.platen_velocity:
         kw["platen_velocity"] = a.platen_velocity
     if a.timestep_factor:

@@ -289,7 +289,8 @@ ADAPTIVE_BASE_VELOCITY = 0.00625
 #: process (a bond break relaxes over a few particle transits, whatever the specimen size), so
 #: its error is set by the strain gained during that relaxation, i.e. by the strain rate; a
 #: longer specimen may crack at a proportionally higher platen speed
-#: (benchmarks/ucs_size_rate.py, docs/labtests.md). See :func:`adaptive_speeds`.
+#: (benchmarks/ucs_adaptive.py on 10 x 20 mm specimens, docs/labtests.md "Size-aware base
+#: speed"). See :func:`adaptive_speeds`.
 ADAPTIVE_BASE_STRAIN_RATE = 2.0 * ADAPTIVE_BASE_VELOCITY / 0.008
 #: Fastest platen speed of the adaptive rule, m/s (16 x the 8 mm base speed): quasi-staticity of
 #: the elastic phase depends on v / c_p, not on the size.
@@ -458,8 +459,8 @@ class LoadingLoop:
     checkpoint : path, optional
         Where ``sim.save`` writes on Ctrl-C (and every ``checkpoint_every`` records).
     on_checkpoint : callable, optional
-        Called after each periodic checkpoint (the protocol writes its partial history and
-        summary there, so that a run killed without Ctrl-C can be resumed).
+        Called after each periodic checkpoint; :func:`run_and_finish` sets it to write the
+        partial results there (so that a run killed without Ctrl-C leaves them).
     progress : bool
         tqdm progress bar on stderr.
     """

@@ -159,14 +159,12 @@ def run_ucs(specimen, *, strain_rate: float | None = None,
         adaptive = ld.ADAPTIVE_DEFAULT
     specimen, _ = ld.relieve_overlaps(specimen.validate("specimen"))
     rule = dict(adaptive) if isinstance(adaptive, dict) else {}
-    if platen_velocity is None and strain_rate is None:
-        if adaptive:        # size-aware base speed: the cracking phase at a fixed strain rate
+    if platen_velocity is None:
+        if adaptive and strain_rate is None:    # size-aware: cracking at a fixed strain rate
             platen_velocity, f_max = ld.adaptive_speeds(float(specimen.box[3] - specimen.box[2]))
             rule.setdefault("f_max", f_max)
-        else:
+        else:                                   # (unused when strain_rate is given)
             platen_velocity = ld.DEFAULT_PLATEN_VELOCITY
-    elif platen_velocity is None:
-        platen_velocity = ld.DEFAULT_PLATEN_VELOCITY        # unused: strain_rate wins
     opts = dict(damping=damping, **(sim_options or {}))
     if timestep_factor is not None:
         opts["timestep_factor"] = timestep_factor
