@@ -81,11 +81,11 @@ def report_markdown(result, targets, *, specimens=(), extra="") -> str:
             cells += [f"{e['responses'][k] / f:.4g}", f"{100 * e['errors'][k]:+.2f} %"]
         seed = "" if e["seed"] is None else str(e["seed"])
         lines.append(f"| {e['phase']} | {e['iteration']} | {seed} | " + " | ".join(cells)
-                     + (" | reused |" if e["phase"] == "seed" and e["seconds"] < 1e-3
+                     + (" | reused |" if e["phase"] == "seed" and e["seconds"] == 0.0
                         else f" | {e['seconds']:.1f} |"))
-    if any(e["phase"] == "seed" and e["seconds"] < 1e-3 for e in result.evaluations):
-        lines += ["", "reused: the point was already run on every specimen (a search on the "
-                  "seed mean); the runs are deterministic, so their results are reused."]
+    if any(e["phase"] == "seed" and e["seconds"] == 0.0 for e in result.evaluations):
+        lines += ["", "reused: the point was already run on that specimen (a search on the "
+                  "seed mean); the runs are deterministic, so the result is reused."]
     lines += ["", "## Final", "", "| target | value | final error | seed mean | seed std | "
               "seed min | seed max |", "|---|---|---|---|---|---|---|"]
     for k in names:
@@ -100,7 +100,7 @@ def report_markdown(result, targets, *, specimens=(), extra="") -> str:
 
 def calibrate_specimens(paths, *, out, params=None, targets=None, tol=0.03, accept=0.05,
                         max_evaluations=10, platen_velocity=None, tension_test="direct",
-                        progress=True, knobs=None, search_on="first"):
+                        progress=True, knobs=None, search_on="first", extra=()):
     """Calibrate on specimen files and write the parameter file and the report into ``out``.
 
     Parameters
@@ -122,6 +122,9 @@ def calibrate_specimens(paths, *, out, params=None, targets=None, tol=0.03, acce
         ``first``: search on the first specimen, seeds at the end (the issue's sketch).
         ``mean``: every search evaluation is the mean over all specimens (costs one run per
         specimen, but targets the seed mean directly; use it when the seed spread is large).
+    extra : sequence of path
+        More ``specimen.npz`` files used only in the seed rounds at the end: a held-out check
+        of the searched set, whose mean over all specimens then drives the correction step.
 
     Returns
     -------
@@ -130,6 +133,8 @@ def calibrate_specimens(paths, *, out, params=None, targets=None, tol=0.03, acce
     from ..specimen import Specimen
     if not paths:
         raise InputError("calibrate: expected at least one specimen file")
+    n_search = len(paths)
+    paths = list(paths) + list(extra)
     specs = [Specimen.load(p) for p in paths]
     start = (start_parameters(specs[0]) if params is None else
              load_parameters(params) if isinstance(params, (str, os.PathLike)) else params)
@@ -157,34 +162,40 @@ def calibrate_specimens(paths, *, out, params=None, targets=None, tol=0.03, acce
     kw = {} if knobs is None else {"knobs": knobs}
     failures = []
 
-    done = {}        # the runs are deterministic: a point already run on every seed is reused
+    done = {}        # the runs are deterministic: (point, specimen) already run is reused
 
-    def run_seeds(p):
+    def run_seeds(p, ks=range(len(evals))):
         # a seed whose test the engine cannot finish (InstabilityError before the peak, even
         # after the time-step retry) is left out of the mean and listed in the report
         key = json.dumps(json_ready(p), sort_keys=True)
-        if key in done:
-            return done[key]
         out = []
-        for k, e in enumerate(evals):
+        for k in ks:
+            if (key, k) in done:
+                if done[key, k] is not None:
+                    out.append({**done[key, k], "seconds": 0.0})     # reused
+                continue
+            ts = time.perf_counter()
             try:
-                out.append({**e(p), "specimen_index": k})
+                done[key, k] = {**evals[k](p), "specimen_index": k}
+                done[key, k]["seconds"] = time.perf_counter() - ts
             except InstabilityError as exc:
+                done[key, k] = None
                 failures.append({"specimen": str(paths[k]), "error": str(exc)})
                 log({"phase": "seed-failed", "iteration": len(failures) - 1, "seed": k,
                      "errors": {}, "seconds": 0.0, "error": str(exc)})
+                continue
+            out.append(done[key, k])
         if not out:
             raise InstabilityError("every seed specimen failed: " + failures[-1]["error"])
-        done[key] = out
         return out
 
     seeds = run_seeds if len(evals) > 1 else None
     if search_on not in ("first", "mean"):
         raise ValueError(f"'search_on' = {search_on!r}, expected 'first' or 'mean'")
     search = evals[0]
-    if search_on == "mean" and len(evals) > 1:
+    if search_on == "mean" and n_search > 1:
         def search(p):
-            rs = run_seeds(p)
+            rs = run_seeds(p, range(n_search))
             return {k: sum(r[k] for r in rs) / len(rs) for k in targets}
     res = calibrate(search, start, targets=targets, tol=tol, accept=accept,
                     max_evaluations=max_evaluations, evaluate_seeds=seeds, progress=log, **kw)
@@ -197,6 +208,7 @@ def calibrate_specimens(paths, *, out, params=None, targets=None, tol=0.03, acce
     rep = res.to_dict()
     rep.update(targets=targets, specimens=[str(p) for p in paths], wall_s=wall,
                failed_seed_runs=failures, search_on=search_on,
+               extra_specimens=[str(p) for p in paths[n_search:]],
                tension_test=tension_test, platen_velocity=platen_velocity)
     write_json_atomic(os.path.join(out, "calibration_report.json"), rep)
     write_text_atomic(os.path.join(out, "calibration_report.md"),

@@ -102,6 +102,9 @@ def register(subparsers):
     p.add_argument("--tension-test", choices=("direct", "brazilian"), default="direct")
     p.add_argument("--search-on", choices=("first", "mean"), default="first",
                    help="search on the first specimen (seeds at the end) or on the seed mean")
+    p.add_argument("--extra", nargs="+", default=(), metavar="SPECIMEN",
+                   help="specimens used only in the seed rounds at the end (held out from "
+                        "the search; the mean over all specimens drives the correction)")
     p.add_argument("--no-progress", action="store_true")
     p.set_defaults(func=run_calibrate_command)
     return subparsers
@@ -181,6 +184,7 @@ def run_calibrate_command(args) -> int:
                                   max_evaluations=args.max_evaluations,
                                   platen_velocity=args.platen_velocity,
                                   tension_test=args.tension_test, search_on=args.search_on,
+                                  extra=args.extra,
                                   progress=not args.no_progress)
     except KeyboardInterrupt:
         print(f"interrupted: evaluations so far in {args.out}", file=sys.stderr)
