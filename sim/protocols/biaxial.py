@@ -13,6 +13,7 @@ stress against the gauge strains, CI and CD as in UCS (on the deviatoric stress)
 from __future__ import annotations
 
 import math
+import os
 import time
 
 import numpy as np
@@ -20,6 +21,7 @@ import numpy as np
 from .. import analysis
 from ..config import THICKNESS
 from . import loading as ld
+from . import resume as rs
 from .report import TestResult, base_summary, crack_summary
 from .ucs import compression_summary
 
@@ -27,10 +29,51 @@ __all__ = ["run_biaxial", "DEFAULT_CONFINEMENT"]
 
 #: Default confining stress, Pa (the thesis's triaxial tests: σ2 = σ3 = 20 MPa).
 DEFAULT_CONFINEMENT = 20e6
+#: File of ``out`` holding the engine state at the end of stage 1 (for ``resume``).
+CONSOLIDATED = "consolidated.npz"
 
 
 def _wall_stress(sim, k, axis, length):
     return abs(float(np.asarray(sim.wall_force(k), float)[axis])) / (length * THICKNESS)
+
+
+def _sizes(sim, walls):
+    """Height (platen gap) and width (side-wall gap) of the specimen, m."""
+    bot, top, left, right = walls
+    return ld.platen_gap(sim, bot, top, 1), ld.platen_gap(sim, left, right, 0)
+
+
+def _consolidate(sim, walls, confinement, *, tol, max_steps, check=200):
+    """Stage 1: servo all four ``walls`` to ``confinement`` until every wall stress is within
+    ``tol`` of it (or ``max_steps`` pass).
+
+    Returns
+    -------
+    steps : int
+    converged : bool
+    seconds : float
+        Wall time.
+    """
+    bot, top, left, right = walls
+    t0 = time.perf_counter()
+    h, w = _sizes(sim, walls)
+    for k, length in ((bot, w), (top, w), (left, h), (right, h)):
+        sim.set_servo(k, confinement, length)
+    steps, ok = 0, False
+    while steps < max_steps:
+        sim.cycle(check)
+        steps += check
+        h, w = _sizes(sim, walls)
+        for k in (bot, top):
+            sim.set_servo(k, confinement, w)
+        for k in (left, right):
+            sim.set_servo(k, confinement, h)
+        errs = [abs(_wall_stress(sim, k, ax, ln) / confinement - 1.0)
+                for k, ax, ln in ((bot, 1, w), (top, 1, w), (left, 0, h), (right, 0, h))]
+        if max(errs) < tol:
+            ok = True
+            break
+    return steps, ok, time.perf_counter() - t0
 
 
 def run_biaxial(specimen, *, confinement: float = DEFAULT_CONFINEMENT,
@@ -42,7 +85,8 @@ def run_biaxial(specimen, *, confinement: float = DEFAULT_CONFINEMENT,
                 consolidation_tol: float = 0.01, consolidation_steps: int = 200_000,
                 limit_strain: float = 0.08, out=None, progress: bool = True,
                 figures: bool = True,
-                checkpoint_every: int = 0, sim_options=None) -> TestResult:
+                checkpoint_every: int = 0, resume: bool = False,
+                sim_options=None) -> TestResult:
     """Biaxial compression at confining stress ``confinement`` (Pa).
 
     Parameters
@@ -57,11 +101,26 @@ def run_biaxial(specimen, *, confinement: float = DEFAULT_CONFINEMENT,
     strain_rate, platen_velocity, post_peak, max_strain, damping, timestep_factor,
     record_strain, ramp_records, limit_strain, out, progress, figures, checkpoint_every,
     sim_options :
-        As in :func:`sim.protocols.ucs.run_ucs`.
+        As in :func:`sim.protocols.ucs.run_ucs`. With ``out``, the state at the end of stage 1
+        is also saved as ``out/consolidated.npz`` (the reference of the strains, for
+        ``resume``).
+    resume : bool
+        Continue a test interrupted in stage 2 from ``out`` (as
+        :func:`sim.protocols.ucs.run_ucs`): the engine state (walls, servos and platen
+        velocities included) from ``checkpoint.npz``, the records from ``history.csv``, the
+        record interval and the stage-1 outcome from ``summary.json``, the reference positions
+        and lengths from ``consolidated.npz``; stage 1 is not run again. Give the same
+        specimen and options (confinement and strain rate are checked).
 
     Returns
     -------
     result : TestResult
+
+    Raises
+    ------
+    ValueError, FileNotFoundError
+        Bad confinement, rate or stop rule; with ``resume``, see
+        :func:`sim.protocols.resume.load_partial`.
     """
     if not (confinement > 0 and math.isfinite(confinement)):
         raise ValueError(f"'confinement' = {confinement!r}, expected a positive stress (Pa)")
@@ -71,53 +130,55 @@ def run_biaxial(specimen, *, confinement: float = DEFAULT_CONFINEMENT,
     opts = dict(damping=damping, **(sim_options or {}))
     if timestep_factor is not None:
         opts["timestep_factor"] = timestep_factor
-    sim = ld.make_simulation(specimen, **opts)
     box = specimen.box
-    bot, top = ld.add_platens(sim, box, axis=1, fric=0.0)
-    left, right = ld.add_platens(sim, box, axis=0, fric=0.0)
+    if resume:
+        prev = rs.load_partial(out, "biaxial", specimen.n_particles, also=(CONSOLIDATED,))
+        start = rs.load_state(prev.paths[CONSOLIDATED], specimen.n_particles)
+        if int(start.step) != int(prev.rows[0]["step"]):
+            raise ValueError(f"cannot resume: {prev.paths[CONSOLIDATED]} is at step "
+                             f"{start.step}, expected {int(prev.rows[0]['step'])} (the first "
+                             f"record of {prev.paths['history.csv']}): not the same run")
+        sim, walls = prev.sim, (0, 1, 2, 3)
+        stage1 = prev.summary
+        steps1 = int(stage1["consolidation_steps"])
+        ok = bool(stage1["consolidation_converged"])
+        consolidation_s = float(stage1["consolidation_s"])
+        prev.wall_s -= consolidation_s          # the summary's wall time includes stage 1
+    else:
+        sim = ld.make_simulation(specimen, **opts)
+        walls = (*ld.add_platens(sim, box, axis=1, fric=0.0),
+                 *ld.add_platens(sim, box, axis=0, fric=0.0))
+        dt = float(sim.dt)
+        # ---- stage 1: isotropic consolidation by four servos
+        steps1, ok, consolidation_s = _consolidate(sim, walls, confinement,
+                                                   tol=consolidation_tol,
+                                                   max_steps=consolidation_steps)
+        sim.clear_servo(walls[0])
+        sim.clear_servo(walls[1])
+        start = sim
+    bot, top, left, right = walls
 
     def sizes():
-        return ld.platen_gap(sim, bot, top, 1), ld.platen_gap(sim, left, right, 0)
+        return _sizes(sim, walls)
 
-    # ---- stage 1: isotropic consolidation by four servos
-    t0 = time.perf_counter()
-    h, w = sizes()
-    for k, length in ((bot, w), (top, w), (left, h), (right, h)):
-        sim.set_servo(k, confinement, length)
-    dt = float(sim.dt)
-    steps1, ok = 0, False
-    check = 200
-    while steps1 < consolidation_steps:
-        sim.cycle(check)
-        steps1 += check
-        h, w = sizes()
-        for k in (bot, top):
-            sim.set_servo(k, confinement, w)
-        for k in (left, right):
-            sim.set_servo(k, confinement, h)
-        errs = [abs(_wall_stress(sim, k, ax, ln) / confinement - 1.0)
-                for k, ax, ln in ((bot, 1, w), (top, 1, w), (left, 0, h), (right, 0, h))]
-        if max(errs) < consolidation_tol:
-            ok = True
-            break
-    consolidation_s = time.perf_counter() - t0
-
-    # ---- stage 2: axial loading, side servos kept
-    sim.clear_servo(bot)
-    sim.clear_servo(top)
-    h0, w0 = sizes()
+    # ---- stage 2: axial loading, side servos kept; strains from the consolidated state
+    h0, w0 = _sizes(start, walls)
     strain_rate, v = ld.loading_rate(strain_rate, platen_velocity, h0)
-    x0, y0 = np.array(sim.x, copy=True), np.array(sim.y, copy=True)
-    cur_box = np.array([np.asarray(sim.wall_position(left))[0],
-                        np.asarray(sim.wall_position(right))[0],
-                        np.asarray(sim.wall_position(bot))[1],
-                        np.asarray(sim.wall_position(top))[1]])
+    x0, y0 = np.array(start.x, copy=True), np.array(start.y, copy=True)
+    cur_box = np.array([np.asarray(start.wall_position(left))[0],
+                        np.asarray(start.wall_position(right))[0],
+                        np.asarray(start.wall_position(bot))[1],
+                        np.asarray(start.wall_position(top))[1]])
     gauge = ld.gauge_indices(x0, y0, cur_box)
-    chunk = max(1, int(round(record_strain / (strain_rate * dt))))
-    stop_strain = max_strain if max_strain is not None else limit_strain
-    max_steps = int(math.ceil((min(stop_strain, limit_strain) + ramp_records * record_strain)
-                              / (strain_rate * dt))) + chunk
-    c_start = ld.crack_tally(sim)
+    c_start = ld.crack_tally(start)
+    if resume:
+        chunk, max_steps = prev.chunk_steps, prev.max_steps
+    else:
+        chunk, max_steps = ld.loop_steps(strain_rate, dt, record_strain=record_strain,
+                                         ramp_records=ramp_records, max_strain=max_strain,
+                                         limit_strain=limit_strain)
+        if out is not None:
+            sim.save(os.path.join(out, CONSOLIDATED))
 
     def on_chunk(k):
         f = min(1.0, (k + 1) / max(1, ramp_records))
@@ -146,7 +207,10 @@ def run_biaxial(specimen, *, confinement: float = DEFAULT_CONFINEMENT,
 
     options = dict(confinement_mpa=confinement / 1e6, strain_rate_per_s=strain_rate,
                    platen_velocity_m_per_s=v, post_peak=post_peak, max_strain=max_strain,
-                   damping=damping, timestep_factor=timestep_factor)
+                   damping=damping, timestep_factor=timestep_factor, chunk_steps=chunk,
+                   max_steps=max_steps)
+    if resume:
+        rs.check_options(prev, options, ("confinement_mpa", "strain_rate_per_s"))
     loop = ld.LoadingLoop(sim=sim, record=record, chunk=chunk, max_steps=max_steps, stop=stop,
                           on_chunk=on_chunk, progress=progress, desc="biaxial",
                           checkpoint_every=checkpoint_every,
@@ -177,4 +241,6 @@ def run_biaxial(specimen, *, confinement: float = DEFAULT_CONFINEMENT,
             res.write(out, figures=figures)
         return res
 
+    if resume:
+        rs.restore_loop(loop, prev)
     return ld.run_and_finish(loop, finish)

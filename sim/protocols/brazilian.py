@@ -19,6 +19,7 @@ import numpy as np
 from .. import analysis
 from ..config import THICKNESS
 from . import loading as ld
+from . import resume as rs
 from .report import TestResult, base_summary, crack_summary
 
 __all__ = ["cut_disc", "disc_diameter", "jaw_indices", "run_brazilian", "PLATEN_FRIC",
@@ -112,10 +113,11 @@ def run_brazilian(specimen, *, cut: bool = True, diameter=None,
                   damping: float = 0.7, timestep_factor: float | None = ld.DEFAULT_TIMESTEP_FACTOR,
                   record_strain: float = 0.25 * ld.RECORD_STRAIN, ramp_records: int = 5,
                   limit_strain: float = 0.02, out=None, progress: bool = True,
-                figures: bool = True,
+                  figures: bool = True,
                   checkpoint_every: int = 0, loading: str = "jaws",
                   jaw_half_angle_deg: float = JAW_HALF_ANGLE_DEG,
-                  platen_fric: float = PLATEN_FRIC, sim_options=None) -> TestResult:
+                  platen_fric: float = PLATEN_FRIC, resume: bool = False,
+                  sim_options=None) -> TestResult:
     """Brazilian test: diametral compression of a disc by curved jaws or rigid platens.
 
     Parameters
@@ -138,11 +140,23 @@ def run_brazilian(specimen, *, cut: bool = True, diameter=None,
     post_peak, max_strain, damping, timestep_factor, record_strain, ramp_records,
     limit_strain, out, progress, figures, checkpoint_every, sim_options :
         As in :func:`sim.protocols.ucs.run_ucs`.
+    resume : bool
+        Continue an interrupted test from ``out`` (as :func:`sim.protocols.ucs.run_ucs`): the
+        engine state of the disc (platens or jaw velocities included) from ``checkpoint.npz``,
+        the records from ``history.csv``, the record interval from ``summary.json``; the disc
+        is cut again and the jaws or platen gap rebuilt from it. Give the same specimen and
+        options (cut, loading, jaw angle and strain rate are checked).
 
     Returns
     -------
     result : TestResult
         ``summary["tensile_mpa"]`` = 2 P_max / (π D t), ``peak_load_n_per_m``, ``diameter_m``.
+
+    Raises
+    ------
+    ValueError, FileNotFoundError
+        Bad rate, stop rule or loading; with ``resume``, see
+        :func:`sim.protocols.resume.load_partial`.
     """
     stop = ld.StopRule(post_peak=post_peak, max_strain=max_strain)
     disc = cut_disc(specimen, diameter=diameter) if cut else specimen.validate("specimen")
@@ -151,25 +165,30 @@ def run_brazilian(specimen, *, cut: bool = True, diameter=None,
     opts = dict(damping=damping, **(sim_options or {}))
     if timestep_factor is not None:
         opts["timestep_factor"] = timestep_factor
-    sim = ld.make_simulation(disc, **opts)
     if loading not in ("jaws", "platens"):
         raise ValueError(f"'loading' = {loading!r}, expected 'jaws' or 'platens'")
+    if resume:
+        prev = rs.load_partial(out, "brazilian", disc.n_particles, what="the disc")
+        sim = prev.sim
+    else:
+        sim = ld.make_simulation(disc, **opts)
     if loading == "platens":
-        lo, hi = ld.add_platens(sim, disc.box, axis=1, fric=platen_fric)
-        h0 = ld.platen_gap(sim, lo, hi)
+        lo, hi = (0, 1) if resume else ld.add_platens(sim, disc.box, axis=1, fric=platen_fric)
+        h0 = float(disc.box[3]) - float(disc.box[2])      # the platens start on the box
     else:
         jb, jt = jaw_indices(disc.x, disc.y, disc.r, half_angle_deg=jaw_half_angle_deg)
 
-        def jaw_gap():
-            return float(sim.y[jt].mean() - sim.y[jb].mean())
+        def jaw_gap(y):
+            return float(y[jt].mean() - y[jb].mean())
         h0 = d
-        g0 = jaw_gap()
+        g0 = jaw_gap(disc.y)
     strain_rate, v = ld.loading_rate(strain_rate, platen_velocity, h0)
-    dt = float(sim.dt)
-    chunk = max(1, int(round(record_strain / (strain_rate * dt))))
-    stop_strain = max_strain if max_strain is not None else limit_strain
-    max_steps = int(math.ceil((min(stop_strain, limit_strain) + ramp_records * record_strain)
-                              / (strain_rate * dt))) + chunk
+    if resume:
+        chunk, max_steps = prev.chunk_steps, prev.max_steps
+    else:
+        chunk, max_steps = ld.loop_steps(strain_rate, float(sim.dt), record_strain=record_strain,
+                                         ramp_records=ramp_records, max_strain=max_strain,
+                                         limit_strain=limit_strain)
 
     def on_chunk(k):
         f = min(1.0, (k + 1) / max(1, ramp_records))
@@ -186,7 +205,7 @@ def run_brazilian(specimen, *, cut: bool = True, diameter=None,
             ea = (h0 - ld.platen_gap(sim, lo, hi)) / h0
         else:   # the disc pushes the top jaw up (+y) and the bottom jaw down
             p = 0.5 * (float(sim.group_force(jt)[1]) - float(sim.group_force(jb)[1]))
-            ea = (g0 - jaw_gap()) / h0
+            ea = (g0 - jaw_gap(sim.y)) / h0
         c = ld.crack_tally(sim)
         ek, es = ld.energies(sim)
         return {"step": int(sim.step), "time_s": float(sim.time), "axial_strain": ea,
@@ -201,7 +220,11 @@ def run_brazilian(specimen, *, cut: bool = True, diameter=None,
                    post_peak=post_peak, max_strain=max_strain, damping=damping,
                    timestep_factor=timestep_factor, cut=cut, loading=loading,
                    jaw_half_angle_deg=jaw_half_angle_deg if loading == "jaws" else None,
-                   platen_fric=platen_fric if loading == "platens" else None)
+                   platen_fric=platen_fric if loading == "platens" else None,
+                   chunk_steps=chunk, max_steps=max_steps)
+    if resume:
+        rs.check_options(prev, options, ("cut", "loading", "jaw_half_angle_deg",
+                                         "strain_rate_per_s"))
     loop = ld.LoadingLoop(sim=sim, record=record, chunk=chunk, max_steps=max_steps, stop=stop,
                           stress_key="brazilian_stress_mpa", on_chunk=on_chunk,
                           progress=progress, desc="brazilian",
@@ -227,4 +250,6 @@ def run_brazilian(specimen, *, cut: bool = True, diameter=None,
             res.write(out, figures=figures)
         return res
 
+    if resume:
+        rs.restore_loop(loop, prev)
     return ld.run_and_finish(loop, finish)

@@ -40,7 +40,11 @@ def _common(p, *, rate=True):
                         f"(default {DEFAULT_TIMESTEP_FACTOR}, from the convergence study)")
     p.add_argument("--checkpoint-every", type=int, default=0,
                    help="also write checkpoint.npz and the partial results every N "
-                        "records (always on Ctrl-C); ucs --resume continues from them")
+                        "records (always on Ctrl-C); --resume continues from them")
+    p.add_argument("--resume", action="store_true",
+                   help="continue an interrupted test from --out (checkpoint.npz, history.csv, "
+                        "summary.json written on Ctrl-C or by --checkpoint-every; biaxial: "
+                        "also consolidated.npz); same specimen and options")
     p.add_argument("--no-figures", action="store_true", help="skip the PNG figures")
     p.add_argument("--no-progress", action="store_true", help="no tqdm progress bar")
 
@@ -65,10 +69,6 @@ def register(subparsers):
                                 "(docs/labtests.md)")
             p.add_argument("--constant-speed", dest="adaptive", action="store_false",
                            help="constant platen speed (--platen-velocity, default 0.0125 m/s)")
-            p.add_argument("--resume", action="store_true",
-                           help="continue an interrupted test from --out (checkpoint.npz, "
-                                "history.csv, summary.json written on Ctrl-C); same specimen "
-                                "and options")
             p.add_argument("--e-method", choices=("tangent", "secant"), default="tangent",
                            help="E at 50 %% of the peak: tangent (default) or secant")
         if name == "tension":
@@ -136,7 +136,7 @@ def run_test_command(args) -> int:
               post_peak=None if args.max_strain is not None else args.post_peak,
               damping=args.damping, timestep_factor=args.timestep_factor, out=None,
               progress=not args.no_progress, checkpoint_every=args.checkpoint_every,
-              figures=not args.no_figures)
+              figures=not args.no_figures, resume=args.resume)
     if args.test == "ucs":
         from .ucs import run_ucs as fn
         kw["e_method"] = args.e_method
@@ -144,7 +144,6 @@ def run_test_command(args) -> int:
         if adaptive is None:        # default: adaptive unless a constant speed/rate was given
             adaptive = args.platen_velocity is None and args.strain_rate is None
         kw["adaptive"] = adaptive
-        kw["resume"] = args.resume
     elif args.test == "tension":
         from .tension import run_tension as fn
         if args.grip_depth_mm is not None:
@@ -156,13 +155,14 @@ def run_test_command(args) -> int:
     else:
         from .biaxial import run_biaxial as fn
         kw["confinement"] = args.confinement_mpa * 1e6
-    os.makedirs(args.out, exist_ok=True)
+    if not args.resume:             # resuming writes nothing before its files are checked
+        os.makedirs(args.out, exist_ok=True)
     try:
         res = fn(spec, **{**kw, "out": args.out})
     except KeyboardInterrupt:
         print(f"interrupted: checkpoint and partial results in {args.out}", file=sys.stderr)
         return 130
-    except (InputError, ValueError) as exc:
+    except (InputError, ValueError, FileNotFoundError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
     s = res.summary

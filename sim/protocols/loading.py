@@ -20,7 +20,7 @@ from ..errors import InstabilityError
 from .outputs import CRACK_COLUMNS, HISTORY_COLUMNS
 
 __all__ = ["DEFAULT_PLATEN_VELOCITY", "DEFAULT_TIMESTEP_FACTOR", "loading_rate",
-           "relieve_overlaps", "DEFAULT_POST_PEAK", "RECORD_STRAIN", "GAUGE_FRACTION",
+           "loop_steps", "relieve_overlaps", "DEFAULT_POST_PEAK", "RECORD_STRAIN", "GAUGE_FRACTION",
            "make_simulation", "add_platens", "gauge_indices", "side_indices",
            "gauge_strains", "side_lateral_strain", "crack_frame", "crack_tally", "energies",
            "LoadingLoop", "StopRule", "AdaptiveSpeed", "ADAPTIVE_DEFAULT",
@@ -67,6 +67,29 @@ def loading_rate(strain_rate, platen_velocity, length):
             and math.isfinite(strain_rate)):
         raise ValueError(f"'strain_rate' = {strain_rate!r}, expected a positive number (1/s)")
     return float(strain_rate), 0.5 * strain_rate * length
+
+
+def loop_steps(strain_rate, dt, *, record_strain, ramp_records, max_strain, limit_strain):
+    """Steps between two records and the step limit of a strain-controlled loading loop.
+
+    A record every ``record_strain`` of loading strain; the limit is the stop strain
+    (``max_strain``, at most ``limit_strain``) plus the ramp's lag, and one record more.
+
+    Returns
+    -------
+    chunk, max_steps : int
+
+    Examples
+    --------
+    >>> loop_steps(1.0, 1e-6, record_strain=2e-5, ramp_records=5, max_strain=None,
+    ...            limit_strain=0.01)
+    (20, 10120)
+    """
+    chunk = max(1, int(round(record_strain / (strain_rate * dt))))
+    stop_strain = max_strain if max_strain is not None else limit_strain
+    max_steps = int(math.ceil((min(stop_strain, limit_strain) + ramp_records * record_strain)
+                              / (strain_rate * dt))) + chunk
+    return chunk, max_steps
 
 
 def relieve_overlaps(specimen):
@@ -585,7 +608,7 @@ def run_and_finish(loop, finish):
         was recorded. With periodic checkpoints (``loop.checkpoint_every``) it is also called
         after each of them with ``figures=False``: the partial history and summary (status
         ``running``) lie beside every checkpoint, so a run killed without Ctrl-C (SIGKILL, power
-        loss) leaves results, and a UCS can be resumed.
+        loss) leaves results, and the test can be resumed (:mod:`sim.protocols.resume`).
 
     Returns
     -------

@@ -10,13 +10,12 @@ same quantities with tension positive, used for the stop rule and the figure.
 """
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from .. import analysis
 from ..config import THICKNESS
 from . import loading as ld
+from . import resume as rs
 from .report import TestResult, base_summary, crack_summary
 
 __all__ = ["run_tension", "grip_indices", "GRIP_FRACTION"]
@@ -53,7 +52,7 @@ def run_tension(specimen, *, strain_rate: float | None = None,
                 record_strain: float = 0.25 * ld.RECORD_STRAIN,
                 ramp_records: int = 5, limit_strain: float = 0.01, out=None,
                 progress: bool = True, figures: bool = True, checkpoint_every: int = 0,
-                sim_options=None) -> TestResult:
+                resume: bool = False, sim_options=None) -> TestResult:
     """Direct tension of ``specimen`` by pulled end groups.
 
     Parameters
@@ -71,20 +70,35 @@ def run_tension(specimen, *, strain_rate: float | None = None,
     damping, timestep_factor, record_strain, ramp_records, limit_strain, out, progress,
     checkpoint_every, sim_options, figures :
         As in :func:`sim.protocols.ucs.run_ucs` (records are 4× denser: tension peaks early).
+    resume : bool
+        Continue an interrupted test from ``out`` (as :func:`sim.protocols.ucs.run_ucs`): the
+        engine state (grips and their velocities included) from ``checkpoint.npz``, the records
+        from ``history.csv``, the record interval from ``summary.json``; grips, gauge and grip
+        length are rebuilt from the specimen. Give the same specimen and options (the grip
+        depth and strain rate are checked).
 
     Returns
     -------
     result : TestResult
         ``summary["tensile_mpa"]`` = σt (positive), ``E_tension_gpa``, cracks and P_sim.
+
+    Raises
+    ------
+    ValueError, FileNotFoundError
+        Bad rate or stop rule; with ``resume``, see :func:`sim.protocols.resume.load_partial`.
     """
     stop = ld.StopRule(post_peak=post_peak, max_strain=max_strain)
     specimen, _ = ld.relieve_overlaps(specimen.validate("specimen"))
     opts = dict(damping=damping, **(sim_options or {}))
     if timestep_factor is not None:
         opts["timestep_factor"] = timestep_factor
-    sim = ld.make_simulation(specimen, **opts)
+    if resume:
+        prev = rs.load_partial(out, "tension", specimen.n_particles)
+        sim = prev.sim
+    else:
+        sim = ld.make_simulation(specimen, **opts)
     box = specimen.box
-    x0, y0 = np.array(sim.x, copy=True), np.array(sim.y, copy=True)
+    x0, y0 = np.array(specimen.x, copy=True), np.array(specimen.y, copy=True)
     bottom, top = grip_indices(y0, specimen.r, box, depth=grip_depth)
     l0 = float(y0[top].mean() - y0[bottom].mean())
     w0 = float(box[1] - box[0])
@@ -93,11 +107,12 @@ def run_tension(specimen, *, strain_rate: float | None = None,
     gbox = np.array([box[0], box[1], (y0[bottom] + specimen.r[bottom]).max(),
                      (y0[top] - specimen.r[top]).min()])
     gauge = np.intersect1d(ld.gauge_indices(x0, y0, gbox, fraction=0.8), free)
-    dt = float(sim.dt)
-    chunk = max(1, int(round(record_strain / (strain_rate * dt))))
-    stop_strain = max_strain if max_strain is not None else limit_strain
-    max_steps = int(math.ceil((min(stop_strain, limit_strain) + ramp_records * record_strain)
-                              / (strain_rate * dt))) + chunk
+    if resume:
+        chunk, max_steps = prev.chunk_steps, prev.max_steps
+    else:
+        chunk, max_steps = ld.loop_steps(strain_rate, float(sim.dt), record_strain=record_strain,
+                                         ramp_records=ramp_records, max_strain=max_strain,
+                                         limit_strain=limit_strain)
 
     def on_chunk(k):
         f = min(1.0, (k + 1) / max(1, ramp_records))
@@ -123,7 +138,10 @@ def run_tension(specimen, *, strain_rate: float | None = None,
 
     options = dict(strain_rate_per_s=strain_rate, grip_velocity_m_per_s=v,
                    grip_depth_m=grip_depth, post_peak=post_peak, max_strain=max_strain,
-                   damping=damping, timestep_factor=timestep_factor)
+                   damping=damping, timestep_factor=timestep_factor, chunk_steps=chunk,
+                   max_steps=max_steps)
+    if resume:
+        rs.check_options(prev, options, ("grip_depth_m", "strain_rate_per_s"))
     loop = ld.LoadingLoop(sim=sim, record=record, chunk=chunk, max_steps=max_steps, stop=stop,
                           stress_key="tensile_stress_mpa", strain_key="tensile_strain",
                           on_chunk=on_chunk, progress=progress, desc="tension",
@@ -151,4 +169,6 @@ def run_tension(specimen, *, strain_rate: float | None = None,
             res.write(out, figures=figures)
         return res
 
+    if resume:
+        rs.restore_loop(loop, prev)
     return ld.run_and_finish(loop, finish)

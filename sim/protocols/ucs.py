@@ -13,13 +13,12 @@ Stops at ``post_peak`` × peak after the peak (default 0.8, as the thesis) or at
 """
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from .. import analysis
 from ..config import THICKNESS
 from . import loading as ld
+from . import resume as rs
 from .report import TestResult, base_summary, crack_summary
 
 __all__ = ["run_ucs", "compression_summary"]
@@ -50,35 +49,6 @@ def compression_summary(history, *, stress_col="axial_stress_mpa", e_method="tan
         "ci_criterion": f"cumulative cracks >= max(1, ceil({ci_fraction} x count at peak))",
         "cd_criterion": "maximum of volumetric strain before the peak",
     }
-
-
-def _load_partial(out, specimen):
-    """Engine state, records, step count and record interval of an interrupted UCS in ``out``."""
-    import json
-    import os
-
-    import pandas as pd
-
-    from ..simulation import Simulation
-    paths = {k: os.path.join(out, k) for k in ("checkpoint.npz", "history.csv", "summary.json")}
-    missing = [p for p in paths.values() if not os.path.exists(p)]
-    if missing:
-        raise FileNotFoundError(f"cannot resume: missing {', '.join(missing)}")
-    with open(paths["summary.json"], encoding="utf-8") as f:
-        summary = json.load(f)
-    opts = summary.get("options", {})
-    if summary.get("test") != "ucs" or "chunk_steps" not in opts:
-        raise ValueError(f"cannot resume: {paths['summary.json']} is not a resumable UCS run")
-    sim = Simulation.load(paths["checkpoint.npz"])
-    if sim.n_particles != specimen.n_particles:
-        raise ValueError(f"cannot resume: the checkpoint has {sim.n_particles} particles, the "
-                         f"specimen {specimen.n_particles}")
-    hist = pd.read_csv(paths["history.csv"])
-    rows = [{k: (v.item() if hasattr(v, "item") else v) for k, v in r.items()}
-            for r in hist.to_dict("records")]
-    steps = int(rows[-1]["step"] - rows[0]["step"]) if rows else 0
-    return sim, {"rows": rows, "steps": steps, "wall_s": float(summary.get("wall_s") or 0.0),
-                 "chunk_steps": int(opts["chunk_steps"]), "max_steps": int(opts["max_steps"])}
 
 
 def run_ucs(specimen, *, strain_rate: float | None = None,
@@ -135,10 +105,10 @@ def run_ucs(specimen, *, strain_rate: float | None = None,
     resume : bool
         Continue an interrupted test from ``out``: the engine state from
         ``out/checkpoint.npz``, the records from ``out/history.csv`` and the step count and
-        record interval from ``out/summary.json`` (all written on Ctrl-C, or the checkpoint
-        every ``checkpoint_every`` records). Give the same specimen and options as the
-        interrupted run. A checkpoint taken between two records (Ctrl-C inside a chunk) adds
-        one record at the resume point.
+        record interval from ``out/summary.json`` (written on Ctrl-C and beside every
+        periodic checkpoint; :mod:`sim.protocols.resume`). Give the same specimen and options
+        as the interrupted run. A checkpoint taken between two records (Ctrl-C inside a chunk)
+        adds one record at the resume point.
     sim_options : dict, optional
         More keyword options for the engine's ``Simulation``.
 
@@ -151,8 +121,9 @@ def run_ucs(specimen, *, strain_rate: float | None = None,
     Raises
     ------
     ValueError
-        Bad rate or stop rule. KeyboardInterrupt is re-raised after the checkpoint and the
-        partial outputs are written.
+        Bad rate or stop rule; with ``resume``, results of another test or specimen in ``out``
+        (FileNotFoundError: a file missing). KeyboardInterrupt is re-raised after the
+        checkpoint and the partial outputs are written.
     """
     stop = ld.StopRule(post_peak=post_peak, max_strain=max_strain)
     if adaptive is None:
@@ -170,9 +141,8 @@ def run_ucs(specimen, *, strain_rate: float | None = None,
         opts["timestep_factor"] = timestep_factor
     box = specimen.box
     if resume:
-        if out is None:
-            raise ValueError("'resume' needs 'out' (the interrupted run's results directory)")
-        sim, prev = _load_partial(out, specimen)
+        prev = rs.load_partial(out, "ucs", specimen.n_particles)
+        sim = prev.sim
         lo, hi = 0, 1
         x0, y0 = np.array(specimen.x, copy=True), np.array(specimen.y, copy=True)
     else:
@@ -185,13 +155,11 @@ def run_ucs(specimen, *, strain_rate: float | None = None,
     gauge = ld.gauge_indices(x0, y0, box)
     left, right = ld.side_indices(x0, specimen.r, box)
     if resume:
-        chunk, max_steps = prev["chunk_steps"], prev["max_steps"]
+        chunk, max_steps = prev.chunk_steps, prev.max_steps
     else:
-        dt = float(sim.dt)
-        chunk = max(1, int(round(record_strain / (strain_rate * dt))))
-        stop_strain = max_strain if max_strain is not None else limit_strain
-        max_steps = int(math.ceil((min(stop_strain, limit_strain)
-                                   + ramp_records * record_strain) / (strain_rate * dt))) + chunk
+        chunk, max_steps = ld.loop_steps(strain_rate, float(sim.dt), record_strain=record_strain,
+                                         ramp_records=ramp_records, max_strain=max_strain,
+                                         limit_strain=limit_strain)
 
     speed = None
     if adaptive:
@@ -246,12 +214,5 @@ def run_ucs(specimen, *, strain_rate: float | None = None,
         return res
 
     if resume:
-        loop.rows = prev["rows"]
-        loop.steps, loop.wall_s = prev["steps"], prev["wall_s"]
-        if speed is not None:          # replay the rule's decisions (its state: factor, tmax)
-            for n in range(1, len(loop.rows)):
-                loop.factor = float(speed.update(loop.rows[:n]))
-        if int(sim.step) != int(loop.rows[-1]["step"]):     # checkpoint inside a chunk
-            loop.steps += int(sim.step) - int(loop.rows[-1]["step"])
-            loop.rows.append(record())
+        rs.restore_loop(loop, prev)
     return ld.run_and_finish(loop, finish)

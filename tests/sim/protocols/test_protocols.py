@@ -15,6 +15,7 @@ from sim.protocols.tension import run_tension
 from sim.protocols.ucs import run_ucs
 
 sys.path.insert(0, os.path.dirname(__file__))
+from _interrupt import kill_after_partial_writes  # noqa: E402
 from _specimens import random_specimen  # noqa: E402
 
 # tiny specimens load fast: 10 mm high, ~20-35 particle rows. The rate keeps the loading time
@@ -49,12 +50,6 @@ def test_ucs_lattice_with_unbreakable_bonds_matches_lattice_formula():
     h = res.history
     assert h["axial_strain"].iloc[-1] >= 4e-4 and h["axial_stress_mpa"].iloc[-1] > 0
     assert (h["lateral_strain"].iloc[-1] < 0) and (h["gauge_lateral_strain"].iloc[-1] < 0)
-
-
-@pytest.fixture(scope="module")
-def rock():
-    """~200-particle random bonded packing, 5 x 10 mm, breakable bonds."""
-    return random_specimen(0.005, 0.010, 0.25e-3, seed=1)
 
 
 @pytest.mark.parametrize("fraction", [0.8, 0.5])
@@ -324,32 +319,13 @@ def test_ucs_interrupted_and_resumed_gives_the_uninterrupted_result(rock, tmp_pa
         run_ucs(rock, strain_rate=RATE, progress=False, out=tmp_path / "none", resume=True)
 
 
-def _kill_after_partial_writes(monkeypatch, n):
-    """Make the n-th periodic partial write (status running) end the run like SIGKILL: the
-    files are written, then SystemExit, so no Ctrl-C handler writes anything more.
-    Returns the list of step counts written and the original ``TestResult.write``."""
-    from sim.protocols.report import TestResult
-    orig, calls = TestResult.write, []
-
-    def write(self, out, **kw):
-        files = orig(self, out, **kw)
-        if self.summary["status"] == "running":
-            calls.append(self.summary["steps"])
-            if len(calls) == n:
-                raise SystemExit("killed")
-        return files
-
-    monkeypatch.setattr(TestResult, "write", write)
-    return calls, orig
-
-
 def test_ucs_killed_after_a_periodic_checkpoint_resumes_to_the_uninterrupted_result(
         rock, tmp_path, monkeypatch):
     """``checkpoint_every`` writes history.csv and summary.json (status running) beside each
     checkpoint, so a run killed without Ctrl-C (no partial outputs of its own) resumes from the
     last checkpoint and ends with the uninterrupted records and summary."""
     ref = run_ucs(rock, strain_rate=RATE, progress=False, out=tmp_path / "ref", figures=False)
-    calls, orig = _kill_after_partial_writes(monkeypatch, 2)
+    calls, orig = kill_after_partial_writes(monkeypatch, 2)
     out = tmp_path / "run"
     with pytest.raises(SystemExit):
         run_ucs(rock, strain_rate=RATE, progress=False, out=out, figures=False,
@@ -391,7 +367,7 @@ def test_periodic_checkpoints_leave_partial_results_in_every_protocol(rock, tmp_
     """A run killed right after a periodic checkpoint (no Ctrl-C handler runs) leaves
     checkpoint.npz with history.csv, cracks.csv and summary.json (status running) beside it."""
     run = {"tension": run_tension, "brazilian": run_brazilian, "biaxial": run_biaxial}[test]
-    _kill_after_partial_writes(monkeypatch, 1)
+    kill_after_partial_writes(monkeypatch, 1)
     out = tmp_path / test
     with pytest.raises(SystemExit):
         run(rock, strain_rate=RATE, progress=False, out=out, figures=False, checkpoint_every=2)

@@ -1,0 +1,14 @@
+"""Fixtures of the protocol tests."""
+import os
+import sys
+
+import pytest
+
+sys.path.insert(0, os.path.dirname(__file__))
+from _specimens import random_specimen  # noqa: E402
+
+
+@pytest.fixture(scope="module")
+def rock():
+    """~200-particle random bonded packing, 5 x 10 mm, breakable bonds."""
+    return random_specimen(0.005, 0.010, 0.25e-3, seed=1)
