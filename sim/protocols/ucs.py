@@ -81,7 +81,7 @@ def run_ucs(specimen, *, strain_rate: float | None = None,
         Stop at this axial strain (elastic checks where nothing breaks).
     damping, timestep_factor : float
         Engine options: local damping α; safety factor on the critical step (default
-        :data:`sim.protocols.loading.DEFAULT_TIMESTEP_FACTOR` = 0.5; None: the engine's).
+        :data:`sim.protocols.loading.DEFAULT_TIMESTEP_FACTOR` = 0.6; None: the engine's).
     record_strain : float
         Axial strain between history records.
     e_method : {"tangent", "secant"}

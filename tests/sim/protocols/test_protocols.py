@@ -38,7 +38,10 @@ def test_ucs_lattice_with_unbreakable_bonds_matches_lattice_formula():
     nx, ny = 16, 32
     s = Specimen.lattice(nx=nx, ny=ny, radius=1e-3, gap=2e-3, emod=60e9, pb_emod=60e9,
                          kratio=2.0, pb_kratio=2.0)
-    res = run_ucs(s, max_strain=4e-4, post_peak=None, strain_rate=RATE / 20, progress=False)
+    # constant speed: the adaptive rule would speed the platens up 3.6x over this elastic run,
+    # and the growing kinetic energy scatters the 40-60 % window's nu by +-5 %
+    res = run_ucs(s, max_strain=4e-4, post_peak=None, strain_rate=RATE / 20, adaptive=False,
+                  progress=False)
     sm = res.summary
     assert sm["stop_reason"] == "max_strain" and sm["cracks"]["total"] == 0
     E_ref, nu_ref = lattice_formula(60e9, 30e9)       # kn = Ē t, ks = kn / κ̄
@@ -253,7 +256,10 @@ def test_engine_instability_after_the_peak_ends_the_test_with_its_answer(rock, m
     sm = res.summary
     assert sm["stop_reason"] == "instability_after_peak" and "unstable" in sm["engine_error"]
     assert sm["ucs_mpa"] == pytest.approx(ref.summary["ucs_mpa"], rel=1e-12)
-    early = int(h["step"].iloc[ip // 2])
+    # before any crack (a pre-peak crack burst can drop the stress by several %, which the
+    # rule cannot tell from the peak): the first record at 30 % of the peak
+    early = int(h["step"].iloc[int(np.argmax(s >= 0.3 * s[ip]))])
+    assert h["cracks_total"].iloc[int(np.argmax(s >= 0.3 * s[ip]))] == 0
 
     def cycle_early(self, n, **kw):
         if self.step >= early:
