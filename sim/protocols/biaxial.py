@@ -139,6 +139,7 @@ def run_biaxial(specimen, *, confinement: float = DEFAULT_CONFINEMENT,
                              f"{start.step}, expected {int(prev.rows[0]['step'])} (the first "
                              f"record of {prev.paths['history.csv']}): not the same run")
         sim, walls = prev.sim, (0, 1, 2, 3)
+        dt = None                               # the loop's step counts come from prev
         stage1 = prev.summary
         steps1 = int(stage1["consolidation_steps"])
         ok = bool(stage1["consolidation_converged"])
@@ -171,14 +172,11 @@ def run_biaxial(specimen, *, confinement: float = DEFAULT_CONFINEMENT,
                         np.asarray(start.wall_position(top))[1]])
     gauge = ld.gauge_indices(x0, y0, cur_box)
     c_start = ld.crack_tally(start)
-    if resume:
-        chunk, max_steps = prev.chunk_steps, prev.max_steps
-    else:
-        chunk, max_steps = ld.loop_steps(strain_rate, dt, record_strain=record_strain,
-                                         ramp_records=ramp_records, max_strain=max_strain,
-                                         limit_strain=limit_strain)
-        if out is not None:
-            sim.save(os.path.join(out, CONSOLIDATED))
+    chunk, max_steps = ld.loop_steps(strain_rate, dt, record_strain=record_strain,
+                                     ramp_records=ramp_records, max_strain=max_strain,
+                                     limit_strain=limit_strain, resumed=prev if resume else None)
+    if out is not None and not resume:
+        sim.save(os.path.join(out, CONSOLIDATED))
 
     def on_chunk(k):
         f = min(1.0, (k + 1) / max(1, ramp_records))

@@ -183,12 +183,9 @@ def run_brazilian(specimen, *, cut: bool = True, diameter=None,
         h0 = d
         g0 = jaw_gap(disc.y)
     strain_rate, v = ld.loading_rate(strain_rate, platen_velocity, h0)
-    if resume:
-        chunk, max_steps = prev.chunk_steps, prev.max_steps
-    else:
-        chunk, max_steps = ld.loop_steps(strain_rate, float(sim.dt), record_strain=record_strain,
-                                         ramp_records=ramp_records, max_strain=max_strain,
-                                         limit_strain=limit_strain)
+    chunk, max_steps = ld.loop_steps(strain_rate, float(sim.dt), record_strain=record_strain,
+                                     ramp_records=ramp_records, max_strain=max_strain,
+                                     limit_strain=limit_strain, resumed=prev if resume else None)
 
     def on_chunk(k):
         f = min(1.0, (k + 1) / max(1, ramp_records))

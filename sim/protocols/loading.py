@@ -71,11 +71,14 @@ def loading_rate(strain_rate, platen_velocity, length):
     return float(strain_rate), 0.5 * strain_rate * length
 
 
-def loop_steps(strain_rate, dt, *, record_strain, ramp_records, max_strain, limit_strain):
+def loop_steps(strain_rate, dt, *, record_strain, ramp_records, max_strain, limit_strain,
+               resumed=None):
     """Steps between two records and the step limit of a strain-controlled loading loop.
 
     A record every ``record_strain`` of loading strain; the limit is the stop strain
     (``max_strain``, at most ``limit_strain``) plus the ramp's lag, and one record more.
+    ``resumed`` (the state read back by :mod:`sim.protocols.resume`) keeps the interrupted
+    run's ``chunk_steps`` and ``max_steps``.
 
     Returns
     -------
@@ -87,6 +90,8 @@ def loop_steps(strain_rate, dt, *, record_strain, ramp_records, max_strain, limi
     ...            limit_strain=0.01)
     (20, 10120)
     """
+    if resumed is not None:
+        return resumed.chunk_steps, resumed.max_steps
     chunk = max(1, int(round(record_strain / (strain_rate * dt))))
     stop_strain = max_strain if max_strain is not None else limit_strain
     max_steps = int(math.ceil((min(stop_strain, limit_strain) + ramp_records * record_strain)

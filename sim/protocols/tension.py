@@ -107,12 +107,9 @@ def run_tension(specimen, *, strain_rate: float | None = None,
     gbox = np.array([box[0], box[1], (y0[bottom] + specimen.r[bottom]).max(),
                      (y0[top] - specimen.r[top]).min()])
     gauge = np.intersect1d(ld.gauge_indices(x0, y0, gbox, fraction=0.8), free)
-    if resume:
-        chunk, max_steps = prev.chunk_steps, prev.max_steps
-    else:
-        chunk, max_steps = ld.loop_steps(strain_rate, float(sim.dt), record_strain=record_strain,
-                                         ramp_records=ramp_records, max_strain=max_strain,
-                                         limit_strain=limit_strain)
+    chunk, max_steps = ld.loop_steps(strain_rate, float(sim.dt), record_strain=record_strain,
+                                     ramp_records=ramp_records, max_strain=max_strain,
+                                     limit_strain=limit_strain, resumed=prev if resume else None)
 
     def on_chunk(k):
         f = min(1.0, (k + 1) / max(1, ramp_records))

@@ -154,12 +154,9 @@ def run_ucs(specimen, *, strain_rate: float | None = None,
     strain_rate, v = ld.loading_rate(strain_rate, platen_velocity, h0)
     gauge = ld.gauge_indices(x0, y0, box)
     left, right = ld.side_indices(x0, specimen.r, box)
-    if resume:
-        chunk, max_steps = prev.chunk_steps, prev.max_steps
-    else:
-        chunk, max_steps = ld.loop_steps(strain_rate, float(sim.dt), record_strain=record_strain,
-                                         ramp_records=ramp_records, max_strain=max_strain,
-                                         limit_strain=limit_strain)
+    chunk, max_steps = ld.loop_steps(strain_rate, float(sim.dt), record_strain=record_strain,
+                                     ramp_records=ramp_records, max_strain=max_strain,
+                                     limit_strain=limit_strain, resumed=prev if resume else None)
 
     speed = None
     if adaptive:
