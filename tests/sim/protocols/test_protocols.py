@@ -15,7 +15,7 @@ from sim.protocols.tension import run_tension
 from sim.protocols.ucs import run_ucs
 
 sys.path.insert(0, os.path.dirname(__file__))
-from _interrupt import kill_after_partial_writes  # noqa: E402
+from _interrupt import ctrl_c_at_step, kill_after_partial_writes  # noqa: E402
 from _specimens import random_specimen  # noqa: E402
 
 # tiny specimens load fast: 10 mm high, ~20-35 particle rows. The rate keeps the loading time
@@ -293,22 +293,13 @@ def test_ucs_interrupted_and_resumed_gives_the_uninterrupted_result(rock, tmp_pa
                                                                     monkeypatch):
     """Ctrl-C (KeyboardInterrupt) between two records leaves checkpoint.npz + partial outputs;
     ``resume=True`` continues the protocol loop and ends with the same records and summary."""
-    from sim.simulation import Simulation
     ref = run_ucs(rock, strain_rate=RATE, progress=False, out=tmp_path / "ref", figures=False)
     cut = int(ref.history["step"].iloc[len(ref.history) // 2])
-    orig = Simulation.cycle
-    fired = []
-
-    def cycle(self, n, **kw):
-        if self.step >= cut and not fired:
-            fired.append(self.step)
-            raise KeyboardInterrupt
-        return orig(self, n, **kw)
-
-    monkeypatch.setattr(Simulation, "cycle", cycle)
+    fired, _ = ctrl_c_at_step(monkeypatch, cut)
     out = tmp_path / "run"
     with pytest.raises(KeyboardInterrupt):
         run_ucs(rock, strain_rate=RATE, progress=False, out=out, figures=False)
+    assert len(fired) == 1
     part = json.loads((out / "summary.json").read_text())
     assert part["stop_reason"] == "interrupted" and (out / "checkpoint.npz").exists()
     assert 0 < part["steps"] < ref.summary["steps"]
