@@ -38,8 +38,8 @@ DEFAULT_PLATEN_VELOCITY = 0.0125
 #: Accuracy would allow 0.8 (UCS and E within 0.7 % / 0.4 % of 0.3, benchmarks/ucs_convergence.py,
 #: 1.6x cheaper), but a calibrated Scenario-1 specimen went unstable at 0.8 after the peak
 #: (fragments form new contacts between time-step updates). 0.6 against 0.5 on four 10 x 20 mm
-#: calibrated specimens: UCS +3.1/+3.6/-1.2/0.0 %, E +0.4/+0.5/+0.1/0.0 % (failure-path noise
-#: at this size), every run stable to 80 % post-peak, and 1/6 fewer steps (docs/labtests.md).
+#: calibrated specimens (one thread): UCS +0.06/+0.05/+1.17/-0.01 %, E +0.03/+0.35/-0.43/+0.01 %,
+#: every run stable to 80 % post-peak, 16-19 % fewer steps (docs/labtests.md).
 DEFAULT_TIMESTEP_FACTOR = 0.6
 #: Default post-peak stop: the run ends when the stress falls below this fraction of the peak.
 DEFAULT_POST_PEAK = 0.8
