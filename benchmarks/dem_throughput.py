@@ -33,11 +33,9 @@ import sim as _sim  # noqa: F401  (sets the OpenMP wait policy before the thread
 def _split(sim, reps=20):
     """Seconds per step of the pair pass and of the particle pass (single call each, all
     threads), timed with the engine's own kernels on the current state."""
-    import numba
-
     from sim.integrate import run_steps
     st = sim.state
-    nch = numba.get_num_threads()
+    nch = sim.force_chunks
     info = np.zeros(8)
     # full steps without rebuild checks are what run_steps does; time it, then time a
     # refresh-only call (one pair pass, no motion) to split pairs from particles

@@ -102,7 +102,9 @@ def main(argv=None):
                          "joint_fraction": float(np.mean(spec.bond_kind == 1)),
                          "mhi_realised": mhi, "ucs_mpa": s["ucs_mpa"], "E_gpa": s["E_gpa"],
                          "nu": s["nu"], "cracks": s["cracks"]["total"],
-                         "wall_s": time.perf_counter() - t0, "steps": s["steps"]})
+                         "wall_s": time.perf_counter() - t0, "steps": s["steps"],
+                         "force_chunks": s["force_chunks"], "threads": s["threads"],
+                         "params": a.params})
             print(json.dumps(rows[-1]), flush=True)
     text = markdown_table(rows)
     os.makedirs(a.out, exist_ok=True)

@@ -24,6 +24,16 @@ SKIN_FACTOR = 0.5
 #: microseconds to start, more when other processes load the cores).
 PARALLEL_MIN_PARTICLES = 4000
 
+#: Chunks of the step loop (force buffers summed in a fixed order) for larger scenes; smaller
+#: ones use one. The chunk count, not the thread count, fixes the summation order of the forces
+#: on a particle, so results are bit-identical on 1 or 2 threads (or any number) at a given
+#: chunk count. Fracture turns a change in summation order into a different failure path
+#: (docs/sim.md), hence a fixed value. 2 fits the 2-core target machine and keeps every
+#: recorded 2-thread result; at most this many threads work in the step loop. Override with
+#: the environment variable ``SIM_FORCE_CHUNKS`` (:func:`sim.state.force_chunks`), e.g. to the
+#: core count of a bigger machine; lab-test summaries record the value.
+FORCE_CHUNKS = 2
+
 #: OpenMP wait policy set (unless the user set one) before the first parallel step. Measured on
 #: the shared 2-core machine at load ~4.7, 20k particles, 2 threads: 0.83 M particle-steps/s with
 #: the default (spinning) policy, 5.07 M with "passive": a spinning thread steals the core its

@@ -98,6 +98,7 @@ from .state import (
     W,
     X,
     Y,
+    force_chunks,
 )
 from .walls import carry_history, wall_candidates
 
@@ -395,17 +396,29 @@ class Simulation:
         self._run(n)
         return self
 
+    @property
+    def force_chunks(self) -> int:
+        """Chunks of the step loop: 1 below ``config.PARALLEL_MIN_PARTICLES`` particles, else
+        :func:`sim.state.force_chunks` (``config.FORCE_CHUNKS`` = 2 unless ``SIM_FORCE_CHUNKS``
+        is set). It fixes the summation order of the forces, so results do not depend on the
+        thread count; at most this many threads work in the step loop."""
+        if self.state.n < config.PARALLEL_MIN_PARTICLES:
+            return 1
+        return force_chunks()
+
     def _run(self, n: int) -> None:
-        # small scenes run on one thread: waking a thread pool costs more than the work
+        nch = self.force_chunks
+        self.state.ensure_rows(nch)
+        # one chunk runs on one thread: waking a thread pool costs more than the work
         nthreads = numba.get_num_threads()
-        if self.state.n < config.PARALLEL_MIN_PARTICLES and nthreads > 1:
+        if nch == 1 and nthreads > 1:
             numba.set_num_threads(1)
             try:
                 self._run_chunks(n, 1)
             finally:
                 numba.set_num_threads(nthreads)
         else:
-            self._run_chunks(n, nthreads)
+            self._run_chunks(n, nch)
 
     def _run_chunks(self, n: int, nch: int) -> None:
         st = self.state
@@ -767,7 +780,8 @@ class Simulation:
     def save(self, path) -> None:
         """Write the full state to ``path`` (npz, no pickle) atomically: temp file, fsync, rename.
 
-        :meth:`load` of the file continues bit-identically on the same machine and thread count.
+        :meth:`load` of the file continues bit-identically on the same machine at the same
+        :attr:`force_chunks` (any thread count).
         """
         meta = dict(format=FORMAT, step=self.step, time=self.time, dt=self.dt,
                     damping=self.damping, timestep_factor=self.timestep_factor,

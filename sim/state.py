@@ -43,10 +43,34 @@ Q_FS, Q_KN, Q_KS, Q_MU, Q_FN = range(5)
 NQF = 5
 
 
-def max_threads() -> int:
-    """Number of force-buffer rows: numba's thread-pool size."""
-    import numba
-    return int(numba.config.NUMBA_NUM_THREADS)
+def force_chunks() -> int:
+    """Chunk count of the step loop for scenes of ``config.PARALLEL_MIN_PARTICLES`` or more.
+
+    ``config.FORCE_CHUNKS`` unless the environment variable ``SIM_FORCE_CHUNKS`` sets it. The
+    chunk count, not the thread count, fixes the order in which the forces on a particle are
+    summed, so a run is bit-identical on any number of threads at a given chunk count; at most
+    this many threads work in the step loop.
+
+    Raises
+    ------
+    InputError
+        ``SIM_FORCE_CHUNKS`` is not a whole number from 1 to 256.
+    """
+    import os
+
+    from .config import FORCE_CHUNKS
+    from .errors import InputError
+    raw = os.environ.get("SIM_FORCE_CHUNKS", "").strip()
+    if not raw:
+        return FORCE_CHUNKS
+    try:
+        k = int(raw)
+    except ValueError:
+        k = 0
+    if not 1 <= k <= 256:
+        raise InputError(f"environment variable SIM_FORCE_CHUNKS = {raw!r}: expected a whole "
+                         "number from 1 to 256 (the step loop's force-buffer chunks)")
+    return k
 
 
 class State:
@@ -70,8 +94,9 @@ class State:
     excl_ptr, excl_adj : CSR of bonded partners (excluded from the Verlet contact list).
     cf : (7, C) float64; ci, cj : (C,) int32; cstart : (N+1,) int64; nc : int
         Contact table, pairs and owner index (contacts of i are cstart[i]:cstart[i+1]).
-    acc : (T, 4N) ndarray of float64
-        Per-thread force buffers, ``acc[t, 4p:4p+3]`` = (fx, fy, moment); between calls row 0
+    acc : (K, 4N) ndarray of float64
+        Force buffers, one row per chunk of the step loop (:func:`force_chunks`; grown by
+        :meth:`ensure_rows`), ``acc[c, 4p:4p+3]`` = (fx, fy, moment); between calls row 0
         holds the force at the current positions and the other rows are zero (rebuilt from
         fx, fy, fm on load, so not saved).
     wf : (W, 17) float64; qf : (5, Q) float64; qp, qw : (Q,) int32; nq : int
@@ -85,13 +110,20 @@ class State:
     def __init__(self, **arrays):
         for k in self.ARRAYS:
             setattr(self, k, arrays[k])
-        self.acc = np.zeros((max_threads(), 4 * self.pf.shape[1]))
+        self.acc = np.zeros((force_chunks(), 4 * self.pf.shape[1]))
         self.acc[0, 0::4] = self.pf[FX]
         self.acc[0, 1::4] = self.pf[FY]
         self.acc[0, 2::4] = self.pf[FM]
         self.nc = int(arrays.get("nc", 0))
         self.nq = int(arrays.get("nq", 0))
         self.npb = int(arrays.get("npb", 0))
+
+    def ensure_rows(self, k: int) -> None:
+        """Give ``acc`` at least ``k`` rows (the new rows zero: canonical form is kept)."""
+        if self.acc.shape[0] < k:
+            grown = np.zeros((k, self.acc.shape[1]))
+            grown[:self.acc.shape[0]] = self.acc
+            self.acc = grown
 
     @property
     def n(self) -> int:

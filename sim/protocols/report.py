@@ -4,6 +4,7 @@ from __future__ import annotations
 import os
 from dataclasses import dataclass, field
 
+import numba
 import pandas as pd
 
 from ..analysis import crack_counts, damage_ratio
@@ -39,6 +40,9 @@ def base_summary(test: str, specimen, loop, sim, options: dict) -> dict:
             "dt_s": float(getattr(sim, "dt", float("nan"))),
             "wall_s": loop.wall_s,
             "particle_steps_per_s": n * steps / loop.wall_s if loop.wall_s > 0 else None,
+            # the chunk count fixes the result; threads only the speed (docs/sim.md)
+            "force_chunks": getattr(sim, "force_chunks", None),
+            "threads": int(numba.get_num_threads()),
             "options": options}
 
 
