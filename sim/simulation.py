@@ -5,8 +5,11 @@ No formulas live here (STYLE.md §5 rule 5): laws are in :mod:`sim.contacts`, lo
 """
 from __future__ import annotations
 
+import contextlib
 import json
 import os
+import signal
+import threading
 
 import numba
 import numpy as np
@@ -103,6 +106,30 @@ from .state import (
 from .walls import carry_history, wall_candidates
 
 FORMAT = "gbmsim-checkpoint-1"
+
+
+@contextlib.contextmanager
+def _ctrl_c_between_calls():
+    """Hold a Ctrl-C (SIGINT) that arrives while the engine runs until its bookkeeping
+    matches the particles; yields a list that is non-empty once one arrived.
+
+    Python runs a signal handler between two bytecodes, and a KeyboardInterrupt raised between
+    the compiled loop's return and the step, time and crack-log updates would leave a state
+    whose checkpoint cannot be resumed. Only the main thread can hold signals; elsewhere, or
+    when SIGINT is ignored or handled by someone else, nothing changes.
+    """
+    pending = []
+    if threading.current_thread() is not threading.main_thread() \
+            or signal.getsignal(signal.SIGINT) is not signal.default_int_handler:
+        yield pending
+        return
+    prev = signal.signal(signal.SIGINT, lambda signum, frame: pending.append(signum))
+    try:
+        yield pending
+    finally:
+        signal.signal(signal.SIGINT, prev)
+    if pending:                 # arrived after the last check of the loop
+        raise KeyboardInterrupt
 
 
 def _set_wait_policy():
@@ -411,16 +438,17 @@ class Simulation:
         self.state.ensure_rows(nch)
         # one chunk runs on one thread: waking a thread pool costs more than the work
         nthreads = numba.get_num_threads()
-        if nch == 1 and nthreads > 1:
-            numba.set_num_threads(1)
-            try:
-                self._run_chunks(n, 1)
-            finally:
-                numba.set_num_threads(nthreads)
-        else:
-            self._run_chunks(n, nch)
+        with _ctrl_c_between_calls() as pending:
+            if nch == 1 and nthreads > 1:
+                numba.set_num_threads(1)
+                try:
+                    self._run_chunks(n, 1, pending)
+                finally:
+                    numba.set_num_threads(nthreads)
+            else:
+                self._run_chunks(n, nch, pending)
 
-    def _run_chunks(self, n: int, nch: int) -> None:
+    def _run_chunks(self, n: int, nch: int, pending=()) -> None:
         st = self.state
         info = self._info
         left = n
@@ -448,6 +476,10 @@ class Simulation:
                                         getattr(self, "_kspread", None), (st.bi, st.bj))
             if status == config.STATUS_REBUILD:
                 self.rebuild()
+            if pending:
+                # Ctrl-C arrived during the call: the step, time and crack log now match
+                # the particles, so a checkpoint taken by the caller is consistent
+                raise KeyboardInterrupt
 
     def _harvest_cracks(self, step0, time0, dt) -> None:
         st = self.state

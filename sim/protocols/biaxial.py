@@ -12,8 +12,10 @@ stress against the gauge strains, CI and CD as in UCS (on the deviatoric stress)
 """
 from __future__ import annotations
 
+import json
 import math
 import os
+import signal
 import time
 
 import numpy as np
@@ -22,6 +24,7 @@ from .. import analysis
 from ..config import THICKNESS
 from . import loading as ld
 from . import resume as rs
+from .outputs import write_results
 from .report import TestResult, base_summary, crack_summary
 from .ucs import compression_summary
 
@@ -31,6 +34,8 @@ __all__ = ["run_biaxial", "DEFAULT_CONFINEMENT"]
 DEFAULT_CONFINEMENT = 20e6
 #: File of ``out`` holding the engine state at the end of stage 1 (for ``resume``).
 CONSOLIDATED = "consolidated.npz"
+#: Steps between the servo updates and convergence checks of stage 1.
+CONSOLIDATION_CHECK = 200
 
 
 def _wall_stress(sim, k, axis, length):
@@ -43,26 +48,36 @@ def _sizes(sim, walls):
     return ld.platen_gap(sim, bot, top, 1), ld.platen_gap(sim, left, right, 0)
 
 
-def _consolidate(sim, walls, confinement, *, tol, max_steps, check=200):
+def _consolidate(sim, walls, confinement, *, tol, max_steps, check=CONSOLIDATION_CHECK,
+                 steps=0, on_check=None):
     """Stage 1: servo all four ``walls`` to ``confinement`` until every wall stress is within
     ``tol`` of it (or ``max_steps`` pass).
+
+    Parameters
+    ----------
+    steps : int
+        Stage-1 steps already done (a resumed run: the servos are in the engine state, and the
+        first interval only completes the one that was interrupted, so the servo updates fall
+        on the same steps as in an uninterrupted run).
+    on_check : callable, optional
+        ``on_check(steps, k, error, converged)`` after each check ``k`` (progress, periodic
+        checkpoints); ``error`` is the largest relative wall-stress error.
 
     Returns
     -------
     steps : int
     converged : bool
-    seconds : float
-        Wall time.
     """
     bot, top, left, right = walls
-    t0 = time.perf_counter()
-    h, w = _sizes(sim, walls)
-    for k, length in ((bot, w), (top, w), (left, h), (right, h)):
-        sim.set_servo(k, confinement, length)
-    steps, ok = 0, False
+    if steps == 0:
+        h, w = _sizes(sim, walls)
+        for k, length in ((bot, w), (top, w), (left, h), (right, h)):
+            sim.set_servo(k, confinement, length)
+    ok = False
     while steps < max_steps:
-        sim.cycle(check)
-        steps += check
+        n = min(check - steps % check, max_steps - steps)
+        sim.cycle(n)
+        steps += n
         h, w = _sizes(sim, walls)
         for k in (bot, top):
             sim.set_servo(k, confinement, w)
@@ -70,10 +85,105 @@ def _consolidate(sim, walls, confinement, *, tol, max_steps, check=200):
             sim.set_servo(k, confinement, h)
         errs = [abs(_wall_stress(sim, k, ax, ln) / confinement - 1.0)
                 for k, ax, ln in ((bot, 1, w), (top, 1, w), (left, 0, h), (right, 0, h))]
-        if max(errs) < tol:
-            ok = True
+        ok = max(errs) < tol
+        if on_check is not None:
+            on_check(steps, steps // check, max(errs), ok)
+        if ok:
             break
-    return steps, ok, time.perf_counter() - t0
+    return steps, ok
+
+
+def _stage1_summary(specimen, sim, status, steps, seconds, options, dt0):
+    """``summary.json`` of a run stopped in stage 1 (``stage`` = ``"consolidation"``)."""
+    from types import SimpleNamespace
+    loop = SimpleNamespace(steps=steps, interrupted=status == "interrupted",
+                           stop_reason="interrupted" if status == "interrupted" else "",
+                           engine_error="", wall_s=seconds)
+    summary = base_summary("biaxial", specimen, loop, sim, options)
+    summary.update({"status": status, "stage": "consolidation", "confining_mpa":
+                    options["confinement_mpa"], "consolidation_steps": steps,
+                    "consolidation_converged": False, "consolidation_s": seconds,
+                    "initial_dt_s": dt0})
+    return summary
+
+
+def _stage1(specimen, sim, walls, confinement, options, *, out, tol, max_steps,
+            checkpoint_every, dt0, steps=0, seconds=0.0, progress=False):
+    """Run stage 1 (from ``steps`` done in ``seconds``). With ``out``: on Ctrl-C, and every
+    ``checkpoint_every`` checks, ``checkpoint.npz``, ``summary.json`` (stage
+    ``consolidation``) and ``cracks.csv`` are written so that ``resume`` continues stage 1.
+
+    Returns
+    -------
+    steps : int
+    converged : bool
+    seconds : float
+        Wall time of stage 1 (earlier parts included).
+    """
+    t0 = time.perf_counter()
+
+    def write(status, n):
+        os.makedirs(out, exist_ok=True)
+        sim.save(os.path.join(out, "checkpoint.npz"))
+        summary = _stage1_summary(specimen, sim, status, n,
+                                  seconds + time.perf_counter() - t0, options, dt0)
+        write_results(out, summary=summary, cracks=ld.crack_frame(sim))
+
+    bar = None
+    if progress:
+        from tqdm import tqdm
+        bar = tqdm(total=max_steps, initial=steps, desc="consolidation", unit="step",
+                   leave=False, dynamic_ncols=True, mininterval=0.5)
+
+    def on_check(n, k, err, converged):
+        if bar is not None:
+            bar.update(n - bar.n)
+            bar.set_postfix_str(f"wall stress error {err:.2%} (target {tol:.2%})")
+        if out is not None and checkpoint_every and not converged \
+                and k % checkpoint_every == 0:
+            write("running", n)
+
+    start = int(sim.step) - steps
+    try:
+        steps, ok = _consolidate(sim, walls, confinement, tol=tol, max_steps=max_steps,
+                                 steps=steps, on_check=on_check)
+    except KeyboardInterrupt:
+        if out is not None:
+            prev = signal.signal(signal.SIGINT, signal.SIG_IGN)   # a second Ctrl-C waits
+            try:
+                write("interrupted", int(sim.step) - start)
+            finally:
+                signal.signal(signal.SIGINT, prev)
+        raise
+    finally:
+        if bar is not None:
+            bar.close()
+    return steps, ok, seconds + time.perf_counter() - t0
+
+
+def _resume_stage1(out, specimen, options):
+    """The engine state, steps, seconds and initial time step of a run stopped in stage 1, or
+    None when ``out/summary.json`` is not of one (then stage 2 resumes)."""
+    spath = os.path.join(out, "summary.json")
+    try:
+        with open(spath, encoding="utf-8") as f:
+            summary = json.load(f)
+    except (OSError, ValueError):
+        return None                      # load_partial names the problem
+    if not (isinstance(summary, dict) and summary.get("test") == "biaxial"
+            and summary.get("stage") == "consolidation"):
+        return None
+    cpath = os.path.join(out, "checkpoint.npz")
+    if not os.path.exists(cpath):
+        raise FileNotFoundError(f"cannot resume: missing {cpath}")
+    old = summary.get("options", {})
+    for k in ("confinement_mpa", "consolidation_tol", "consolidation_max_steps"):
+        if old.get(k) != options[k]:
+            raise ValueError(f"cannot resume: {spath} has options.{k} = {old.get(k)!r}, this "
+                             f"run {options[k]!r}; give the interrupted run's options")
+    sim = rs.load_state(cpath, specimen.n_particles)
+    steps = int(summary["consolidation_steps"])
+    return sim, steps, float(summary["consolidation_s"]), float(summary["initial_dt_s"])
 
 
 def run_biaxial(specimen, *, confinement: float = DEFAULT_CONFINEMENT,
@@ -110,7 +220,11 @@ def run_biaxial(specimen, *, confinement: float = DEFAULT_CONFINEMENT,
         velocities included) from ``checkpoint.npz``, the records from ``history.csv``, the
         record interval and the stage-1 outcome from ``summary.json``, the reference positions
         and lengths from ``consolidated.npz``; stage 1 is not run again. Give the same
-        specimen and options (confinement and strain rate are checked).
+        specimen and options (confinement and strain rate are checked). A test stopped in
+        stage 1 (``summary.json`` with ``"stage": "consolidation"``, written on Ctrl-C and
+        every ``checkpoint_every`` servo intervals of :data:`CONSOLIDATION_CHECK` steps)
+        continues stage 1 from ``checkpoint.npz`` and then runs stage 2 (confinement,
+        ``consolidation_tol`` and ``consolidation_steps`` are checked).
 
     Returns
     -------
@@ -131,7 +245,12 @@ def run_biaxial(specimen, *, confinement: float = DEFAULT_CONFINEMENT,
     if timestep_factor is not None:
         opts["timestep_factor"] = timestep_factor
     box = specimen.box
-    if resume:
+    stage1_opts = dict(confinement_mpa=confinement / 1e6, consolidation_tol=consolidation_tol,
+                       consolidation_max_steps=int(consolidation_steps), damping=damping,
+                       timestep_factor=timestep_factor)
+    part1 = _resume_stage1(out, specimen, stage1_opts) if resume else None
+    resume2 = resume and part1 is None          # stopped in stage 2
+    if resume2:
         prev = rs.load_partial(out, "biaxial", specimen.n_particles, also=(CONSOLIDATED,))
         start = rs.load_state(prev.paths[CONSOLIDATED], specimen.n_particles)
         if int(start.step) != int(prev.rows[0]["step"]):
@@ -146,14 +265,20 @@ def run_biaxial(specimen, *, confinement: float = DEFAULT_CONFINEMENT,
         consolidation_s = float(stage1["consolidation_s"])
         prev.wall_s -= consolidation_s          # the summary's wall time includes stage 1
     else:
-        sim = ld.make_simulation(specimen, **opts)
-        walls = (*ld.add_platens(sim, box, axis=1, fric=0.0),
-                 *ld.add_platens(sim, box, axis=0, fric=0.0))
-        dt = float(sim.dt)
+        if part1 is None:
+            sim = ld.make_simulation(specimen, **opts)
+            walls = (*ld.add_platens(sim, box, axis=1, fric=0.0),
+                     *ld.add_platens(sim, box, axis=0, fric=0.0))
+            dt = float(sim.dt)
+            done, seconds = 0, 0.0
+        else:                                   # stopped in stage 1: continue it
+            sim, done, seconds, dt = part1
+            walls = (0, 1, 2, 3)
         # ---- stage 1: isotropic consolidation by four servos
-        steps1, ok, consolidation_s = _consolidate(sim, walls, confinement,
-                                                   tol=consolidation_tol,
-                                                   max_steps=consolidation_steps)
+        steps1, ok, consolidation_s = _stage1(
+            specimen, sim, walls, confinement, stage1_opts, out=out, tol=consolidation_tol,
+            max_steps=consolidation_steps, checkpoint_every=checkpoint_every, dt0=dt,
+            steps=done, seconds=seconds, progress=progress)
         sim.clear_servo(walls[0])
         sim.clear_servo(walls[1])
         start = sim
@@ -174,8 +299,8 @@ def run_biaxial(specimen, *, confinement: float = DEFAULT_CONFINEMENT,
     c_start = ld.crack_tally(start)
     chunk, max_steps = ld.loop_steps(strain_rate, dt, record_strain=record_strain,
                                      ramp_records=ramp_records, max_strain=max_strain,
-                                     limit_strain=limit_strain, resumed=prev if resume else None)
-    if out is not None and not resume:
+                                     limit_strain=limit_strain, resumed=prev if resume2 else None)
+    if out is not None and not resume2:
         sim.save(os.path.join(out, CONSOLIDATED))
 
     def on_chunk(k):
@@ -203,11 +328,10 @@ def run_biaxial(specimen, *, confinement: float = DEFAULT_CONFINEMENT,
                 "deviatoric_stress_mpa": (s1 - s3) / 1e6, "gauge_axial_strain": ga,
                 "gauge_lateral_strain": gl, "cracks_loading": c["total"] - c_start["total"]}
 
-    options = dict(confinement_mpa=confinement / 1e6, strain_rate_per_s=strain_rate,
+    options = dict(**stage1_opts, strain_rate_per_s=strain_rate,
                    platen_velocity_m_per_s=v, post_peak=post_peak, max_strain=max_strain,
-                   damping=damping, timestep_factor=timestep_factor, chunk_steps=chunk,
-                   max_steps=max_steps)
-    if resume:
+                   chunk_steps=chunk, max_steps=max_steps)
+    if resume2:
         rs.check_options(prev, options, ("confinement_mpa", "strain_rate_per_s"))
     loop = ld.LoadingLoop(sim=sim, record=record, chunk=chunk, max_steps=max_steps, stop=stop,
                           on_chunk=on_chunk, progress=progress, desc="biaxial",
@@ -239,6 +363,6 @@ def run_biaxial(specimen, *, confinement: float = DEFAULT_CONFINEMENT,
             res.write(out, figures=figures)
         return res
 
-    if resume:
+    if resume2:
         rs.restore_loop(loop, prev)
     return ld.run_and_finish(loop, finish)

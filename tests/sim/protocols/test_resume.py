@@ -107,6 +107,63 @@ def test_interrupted_and_resumed_gives_the_uninterrupted_result(rock, reference,
     assert len(pd.read_csv(out / "history.csv")) == len(ref.history)
 
 
+@pytest.mark.parametrize("how", ["ctrl_c", "killed"])
+def test_biaxial_interrupted_in_consolidation_resumes(rock, reference, tmp_path, monkeypatch,
+                                                      how):
+    """Stopped in stage 1 (Ctrl-C inside a servo interval, or killed after a periodic
+    checkpoint), the biaxial test leaves a checkpoint and a summary of stage ``consolidation``;
+    ``resume=True`` finishes stage 1 on the same servo updates and runs stage 2: the result
+    equals the uninterrupted run."""
+    from sim.protocols.biaxial import CONSOLIDATION_CHECK
+    from sim.simulation import Simulation
+    ref, _ = reference("biaxial")
+    assert ref.summary["consolidation_steps"] >= 2 * CONSOLIDATION_CHECK
+    out = tmp_path / "bx"
+    if how == "ctrl_c":
+        orig = Simulation.cycle
+
+        def cycle(self, n, **kw):
+            if self.step == CONSOLIDATION_CHECK:       # 70 steps into the 2nd interval
+                monkeypatch.setattr(Simulation, "cycle", orig)
+                orig(self, 70)
+                raise KeyboardInterrupt
+            return orig(self, n, **kw)
+
+        monkeypatch.setattr(Simulation, "cycle", cycle)
+        with pytest.raises(KeyboardInterrupt):
+            run_biaxial(rock, strain_rate=RATE, progress=False, out=out, figures=False)
+        status, done = "interrupted", CONSOLIDATION_CHECK + 70
+    else:
+        from sim.protocols import biaxial
+        real = biaxial.write_results
+
+        def write_then_die(folder, **kw):               # killed after the first partial write
+            real(folder, **kw)
+            raise SystemExit("killed")
+
+        monkeypatch.setattr(biaxial, "write_results", write_then_die)
+        with pytest.raises(SystemExit):
+            run_biaxial(rock, strain_rate=RATE, progress=False, out=out, figures=False,
+                        checkpoint_every=1)
+        monkeypatch.setattr(biaxial, "write_results", real)
+        status, done = "running", CONSOLIDATION_CHECK
+    part = json.loads((out / "summary.json").read_text())
+    assert (part["status"], part["stage"], part["consolidation_steps"]) == (status, "consolidation",
+                                                                          done)
+    assert Simulation.load(out / "checkpoint.npz").step == done
+    assert not (out / "consolidated.npz").exists() and (out / "cracks.csv").exists()
+    kw = dict(strain_rate=RATE, progress=False, figures=False, resume=True, out=out)
+    before = snapshot(out)
+    with pytest.raises(ValueError, match=r"options\.confinement_mpa = 20\.0, this run 10\.0"):
+        run_biaxial(rock, confinement=10e6, **kw)
+    assert snapshot(out) == before
+    res = run_biaxial(rock, **kw)
+    assert res.summary["status"] == "complete"
+    assert_same_summary(ref.summary, res.summary)
+    pd.testing.assert_frame_equal(res.history, ref.history, rtol=1e-12)
+    assert (out / "consolidated.npz").exists()
+
+
 @pytest.fixture
 def interrupted_tension(rock, reference, tmp_path, monkeypatch):
     """A tension run stopped by Ctrl-C half way: its results directory."""
