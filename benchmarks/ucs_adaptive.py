@@ -4,7 +4,8 @@ Runs the UCS protocol (80 % post-peak stop, default time-step factor) on each sp
 each loading mode and prints one JSON line per run (wall s, steps, UCS, E, errors against the
 reference mode = the last one given). Modes: ``const:V`` (constant platen speed V m/s) and
 ``adaptive`` (the default adaptive rule, :data:`sim.protocols.loading.ADAPTIVE_DEFAULT`),
-``adaptive:VBASE[:FMAX]`` (same rule, another base speed and largest factor).
+``adaptive:VBASE[:FMAX[:FPEAK]]`` (same rule, another base speed, largest factor and factor
+near the peak).
 
     python benchmarks/ucs_adaptive.py --specimens s1_4x8_seed1.npz,s1_4x8_seed2.npz,... \
         --modes adaptive,const:0.0125,const:0.00625 --out benchmarks/ucs_results/adaptive.json
@@ -22,17 +23,21 @@ import time
 
 
 def mode_options(mode):
-    """``run_ucs`` keywords of a loading mode: ``const:V``, ``adaptive[:VBASE[:FMAX]]``."""
+    """``run_ucs`` keywords of a loading mode: ``const:V``,
+    ``adaptive[:VBASE[:FMAX[:FPEAK]]]`` (FPEAK: the rule's ``f_peak``, the factor near the
+    peak and after it; 1 unless given, as the size-aware default below 25 mm)."""
     if mode.startswith("const:"):
         return dict(platen_velocity=float(mode.split(":")[1]), adaptive=False)
     parts = mode.split(":")
     if parts[0] != "adaptive":
-        raise ValueError(f"mode {mode!r}: expected adaptive[:VBASE[:FMAX]] or const:V")
+        raise ValueError(f"mode {mode!r}: expected adaptive[:VBASE[:FMAX[:FPEAK]]] or const:V")
     kw = dict(adaptive=True)
     if len(parts) > 1:
         kw["platen_velocity"] = float(parts[1])
     if len(parts) > 2:
         kw["adaptive"] = {"f_max": float(parts[2])}
+    if len(parts) > 3:
+        kw["adaptive"]["f_peak"] = float(parts[3])
     return kw
 
 

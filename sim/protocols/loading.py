@@ -25,7 +25,7 @@ __all__ = ["DEFAULT_PLATEN_VELOCITY", "DEFAULT_TIMESTEP_FACTOR", "loading_rate",
            "gauge_strains", "side_lateral_strain", "crack_frame", "crack_tally", "energies",
            "LoadingLoop", "StopRule", "AdaptiveSpeed", "ADAPTIVE_DEFAULT",
            "ADAPTIVE_BASE_VELOCITY", "ADAPTIVE_BASE_STRAIN_RATE", "ADAPTIVE_FAST_VELOCITY",
-           "adaptive_speeds"]
+           "adaptive_speeds", "adaptive_peak_factor"]
 
 #: Default loading speed, m/s: each platen (grip, jaw) moves at this speed, so the loading
 #: strain rate is 2 v / L. Quasi-static accuracy depends on v / c_p (the loading time to the peak
@@ -325,6 +325,13 @@ ADAPTIVE_BASE_STRAIN_RATE = 2.0 * ADAPTIVE_BASE_VELOCITY / 0.008
 #: Fastest platen speed of the adaptive rule, m/s (16 x the 8 mm base speed): quasi-staticity of
 #: the elastic phase depends on v / c_p, not on the size.
 ADAPTIVE_FAST_VELOCITY = 16.0 * ADAPTIVE_BASE_VELOCITY
+#: Largest platen speed of the adaptive rule near the peak and after it, m/s. The last ~10 %
+#: before the peak is a specimen-wide event (cracks coalesce across the specimen and relax over
+#: a transit of the whole specimen), so its error follows the platen speed, not the strain
+#: rate: at 25 x 50 mm the 0.039 m/s cracking speed read UCS 4.1 % above a run at half of it
+#: while the two curves agreed within 0.55 % up to 90 % of the peak (docs/labtests.md,
+#: "Thesis-scale time"). 0.0195 m/s is that half speed; it binds from 25 mm long specimens up.
+ADAPTIVE_PEAK_VELOCITY = 0.01953125
 
 
 def adaptive_speeds(length):
@@ -347,6 +354,20 @@ def adaptive_speeds(length):
     return v, max(1.0, ADAPTIVE_FAST_VELOCITY / v)
 
 
+def adaptive_peak_factor(base_velocity):
+    """Speed factor of the adaptive rule near the peak and after it: the base speed capped at
+    :data:`ADAPTIVE_PEAK_VELOCITY` (1 when the base speed is already below it).
+
+    Examples
+    --------
+    >>> adaptive_peak_factor(adaptive_speeds(0.02)[0])    # 20 mm: no change
+    1.0
+    >>> adaptive_peak_factor(adaptive_speeds(0.05)[0])    # thesis scale: half the base speed
+    0.5
+    """
+    return min(1.0, ADAPTIVE_PEAK_VELOCITY / float(base_velocity))
+
+
 @dataclass
 class AdaptiveSpeed:
     """Adaptive loading speed: fast while the response is elastic and crack-free, slow when
@@ -362,7 +383,10 @@ class AdaptiveSpeed:
     - ``T`` = tangent stiffness over the last ``window`` records / the largest tangent seen
       so far; ``g_tan = clip((T - tan_slow) / (tan_fast - tan_slow), 0, 1)`` (softening of the
       stress-strain curve: damage and the approach to the peak slow the platens down);
-    - after the peak (stress below ``peak_drop`` x the running maximum), f = 1;
+    - after the peak (stress below ``peak_drop`` x the running maximum), f = 1, or ``f_peak``
+      when that is below 1; with ``f_peak`` < 1 also f <= ``f_peak`` while ``T`` <
+      ``tan_peak`` (the approach to the peak, where the error follows the platen speed: see
+      :func:`adaptive_peak_factor`);
     - quasi-static check: the kinetic energy of the particles must stay below ``ke_ratio`` x
       their strain energy. Loading a quasi-static elastic body at a steady speed gives
       KE/SE ~ 1/(24 N^2), N = ε c_p / (2 v) the loading time in P-wave transits, and KE grows
@@ -376,6 +400,8 @@ class AdaptiveSpeed:
     ----------
     f_max : float
         Largest speed factor (the fast speed is ``f_max`` x the base speed).
+    f_peak : float
+        Largest factor near the peak and after it (<= 1; 1 = the base speed, as before).
     """
 
     f_max: float = 16.0
@@ -386,6 +412,8 @@ class AdaptiveSpeed:
     window: int = 3
     rise: float = 1.5
     ke_ratio: float = 1e-3
+    f_peak: float = 1.0
+    tan_peak: float = 0.75
     stress_key: str = "axial_stress_mpa"
     strain_key: str = "axial_strain"
     factor: float = 1.0
@@ -416,7 +444,9 @@ class AdaptiveSpeed:
         g_tan = min(1.0, max(0.0, (T - self.tan_slow) / (self.tan_fast - self.tan_slow)))
         target = 1.0 + (self.f_max - 1.0) * g_crack * g_tan
         if s[-1] < self.peak_drop * smax:
-            target = 1.0
+            target = min(1.0, self.f_peak)
+        elif self.f_peak < 1.0 and T < self.tan_peak:
+            target = min(target, self.f_peak)
         target = self._ke_cap(rows[-1], target)
         self.factor = target if target < self.factor else min(target, self.factor * self.rise)
         return self.factor

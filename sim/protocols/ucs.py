@@ -134,6 +134,7 @@ def run_ucs(specimen, *, strain_rate: float | None = None,
         if adaptive and strain_rate is None:    # size-aware: cracking at a fixed strain rate
             platen_velocity, f_max = ld.adaptive_speeds(float(specimen.box[3] - specimen.box[2]))
             rule.setdefault("f_max", f_max)
+            rule.setdefault("f_peak", ld.adaptive_peak_factor(platen_velocity))
         else:                                   # (unused when strain_rate is given)
             platen_velocity = ld.DEFAULT_PLATEN_VELOCITY
     opts = dict(damping=damping, **(sim_options or {}))
@@ -191,7 +192,8 @@ def run_ucs(specimen, *, strain_rate: float | None = None,
                    adaptive_rule=None if speed is None else {
                        k: getattr(speed, k) for k in ("f_max", "crack_scale", "tan_fast",
                                                       "tan_slow", "peak_drop", "window",
-                                                      "rise", "ke_ratio")})
+                                                      "rise", "ke_ratio", "f_peak",
+                                                      "tan_peak")})
     loop = ld.LoadingLoop(sim=sim, record=record, chunk=chunk, max_steps=max_steps, stop=stop,
                           on_chunk=on_chunk, progress=progress, desc="ucs", speed=speed,
                           checkpoint_every=checkpoint_every,
