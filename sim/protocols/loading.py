@@ -25,7 +25,7 @@ __all__ = ["DEFAULT_PLATEN_VELOCITY", "DEFAULT_TIMESTEP_FACTOR", "loading_rate",
            "gauge_strains", "side_lateral_strain", "crack_frame", "crack_tally", "energies",
            "LoadingLoop", "StopRule", "AdaptiveSpeed", "ADAPTIVE_DEFAULT",
            "ADAPTIVE_BASE_VELOCITY", "ADAPTIVE_BASE_STRAIN_RATE", "ADAPTIVE_FAST_VELOCITY",
-           "adaptive_speeds", "adaptive_peak_factor"]
+           "adaptive_speeds"]
 
 #: Default loading speed, m/s: each platen (grip, jaw) moves at this speed, so the loading
 #: strain rate is 2 v / L. Quasi-static accuracy depends on v / c_p (the loading time to the peak
@@ -325,13 +325,6 @@ ADAPTIVE_BASE_STRAIN_RATE = 2.0 * ADAPTIVE_BASE_VELOCITY / 0.008
 #: Fastest platen speed of the adaptive rule, m/s (16 x the 8 mm base speed): quasi-staticity of
 #: the elastic phase depends on v / c_p, not on the size.
 ADAPTIVE_FAST_VELOCITY = 16.0 * ADAPTIVE_BASE_VELOCITY
-#: Largest platen speed of the adaptive rule near the peak and after it, m/s. The last ~10 %
-#: before the peak is a specimen-wide event (cracks coalesce across the specimen and relax over
-#: a transit of the whole specimen), so its error follows the platen speed, not the strain
-#: rate: at 25 x 50 mm the 0.039 m/s cracking speed read UCS 4.1 % above a run at half of it
-#: while the two curves agreed within 0.55 % up to 90 % of the peak (docs/labtests.md,
-#: "Thesis-scale time"). 0.0195 m/s is that half speed; it binds from 25 mm long specimens up.
-ADAPTIVE_PEAK_VELOCITY = 0.01953125
 
 
 def adaptive_speeds(length):
@@ -354,20 +347,6 @@ def adaptive_speeds(length):
     return v, max(1.0, ADAPTIVE_FAST_VELOCITY / v)
 
 
-def adaptive_peak_factor(base_velocity):
-    """Speed factor of the adaptive rule near the peak and after it: the base speed capped at
-    :data:`ADAPTIVE_PEAK_VELOCITY` (1 when the base speed is already below it).
-
-    Examples
-    --------
-    >>> adaptive_peak_factor(adaptive_speeds(0.02)[0])    # 20 mm: no change
-    1.0
-    >>> adaptive_peak_factor(adaptive_speeds(0.05)[0])    # thesis scale: half the base speed
-    0.5
-    """
-    return min(1.0, ADAPTIVE_PEAK_VELOCITY / float(base_velocity))
-
-
 @dataclass
 class AdaptiveSpeed:
     """Adaptive loading speed: fast while the response is elastic and crack-free, slow when
@@ -385,8 +364,8 @@ class AdaptiveSpeed:
       stress-strain curve: damage and the approach to the peak slow the platens down);
     - after the peak (stress below ``peak_drop`` x the running maximum), f = 1, or ``f_peak``
       when that is below 1; with ``f_peak`` < 1 also f <= ``f_peak`` while ``T`` <
-      ``tan_peak`` (the approach to the peak, where the error follows the platen speed: see
-      :func:`adaptive_peak_factor`);
+      ``tan_peak`` (an option, off by default: on the 25 x 50 mm thesis-scale specimen
+      ``f_peak`` = 0.5 cost 47 % more steps and moved UCS by +0.4 %, docs/labtests.md);
     - quasi-static check: the kinetic energy of the particles must stay below ``ke_ratio`` x
       their strain energy. Loading a quasi-static elastic body at a steady speed gives
       KE/SE ~ 1/(24 N^2), N = ε c_p / (2 v) the loading time in P-wave transits, and KE grows
@@ -401,7 +380,7 @@ class AdaptiveSpeed:
     f_max : float
         Largest speed factor (the fast speed is ``f_max`` x the base speed).
     f_peak : float
-        Largest factor near the peak and after it (<= 1; 1 = the base speed, as before).
+        Largest factor near the peak and after it (<= 1; default 1 = the base speed).
     """
 
     f_max: float = 16.0

@@ -134,7 +134,6 @@ def run_ucs(specimen, *, strain_rate: float | None = None,
         if adaptive and strain_rate is None:    # size-aware: cracking at a fixed strain rate
             platen_velocity, f_max = ld.adaptive_speeds(float(specimen.box[3] - specimen.box[2]))
             rule.setdefault("f_max", f_max)
-            rule.setdefault("f_peak", ld.adaptive_peak_factor(platen_velocity))
         else:                                   # (unused when strain_rate is given)
             platen_velocity = ld.DEFAULT_PLATEN_VELOCITY
     opts = dict(damping=damping, **(sim_options or {}))
