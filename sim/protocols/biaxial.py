@@ -15,7 +15,6 @@ from __future__ import annotations
 import json
 import math
 import os
-import signal
 import time
 
 import numpy as np
@@ -149,11 +148,8 @@ def _stage1(specimen, sim, walls, confinement, options, *, out, tol, max_steps,
                                  steps=steps, on_check=on_check)
     except KeyboardInterrupt:
         if out is not None:
-            prev = signal.signal(signal.SIGINT, signal.SIG_IGN)   # a second Ctrl-C waits
-            try:
+            with ld.second_ctrl_c_waits():
                 write("interrupted", int(sim.step) - start)
-            finally:
-                signal.signal(signal.SIGINT, prev)
         raise
     finally:
         if bar is not None:

@@ -6,6 +6,7 @@ returned: **compression positive** (stress and strain).
 """
 from __future__ import annotations
 
+import contextlib
 import math
 import os
 import signal
@@ -431,6 +432,17 @@ class AdaptiveSpeed:
         return self.factor
 
 
+@contextlib.contextmanager
+def second_ctrl_c_waits():
+    """Ignore Ctrl-C while the checkpoint and partial results of an interrupted test are
+    written (a second Ctrl-C would leave them half-written)."""
+    prev = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, prev)
+
+
 @dataclass
 class StopRule:
     """When a strain-controlled test ends.
@@ -600,11 +612,8 @@ class LoadingLoop:
         except KeyboardInterrupt:
             self.interrupted = True
             self.stop_reason = "interrupted"
-            prev = signal.signal(signal.SIGINT, signal.SIG_IGN)   # a second Ctrl-C waits
-            try:
+            with second_ctrl_c_waits():
                 self.save_checkpoint()
-            finally:
-                signal.signal(signal.SIGINT, prev)
             raise
         finally:
             self.wall_s = wall_before + time.perf_counter() - t0
