@@ -24,8 +24,8 @@ import time
 
 def mode_options(mode):
     """``run_ucs`` keywords of a loading mode: ``const:V``,
-    ``adaptive[:VBASE[:FMAX[:FPEAK]]]`` (FPEAK: the rule's ``f_peak``, the factor near the
-    peak and after it; 1 unless given, as the size-aware default below 25 mm)."""
+    ``adaptive[:VBASE[:FMAX[:FPEAK]]]`` (FPEAK: the rule's ``f_peak``, the largest factor
+    near the peak and after it; 1, the default, unless given)."""
     if mode.startswith("const:"):
         return dict(platen_velocity=float(mode.split(":")[1]), adaptive=False)
     parts = mode.split(":")

@@ -95,8 +95,9 @@ class State:
     cf : (7, C) float64; ci, cj : (C,) int32; cstart : (N+1,) int64; nc : int
         Contact table, pairs and owner index (contacts of i are cstart[i]:cstart[i+1]).
     acc : (K, 4N) ndarray of float64
-        Force buffers, one row per chunk of the step loop (:func:`force_chunks`; grown by
-        :meth:`ensure_rows`), ``acc[c, 4p:4p+3]`` = (fx, fy, moment); between calls row 0
+        Force buffers, one row per chunk of the step loop (one row at first; the engine
+        grows it to its chunk count with :meth:`ensure_rows`), ``acc[c, 4p:4p+3]`` =
+        (fx, fy, moment); between calls row 0
         holds the force at the current positions and the other rows are zero (rebuilt from
         fx, fy, fm on load, so not saved).
     wf : (W, 17) float64; qf : (5, Q) float64; qp, qw : (Q,) int32; nq : int
@@ -110,7 +111,7 @@ class State:
     def __init__(self, **arrays):
         for k in self.ARRAYS:
             setattr(self, k, arrays[k])
-        self.acc = np.zeros((force_chunks(), 4 * self.pf.shape[1]))
+        self.acc = np.zeros((1, 4 * self.pf.shape[1]))
         self.acc[0, 0::4] = self.pf[FX]
         self.acc[0, 1::4] = self.pf[FY]
         self.acc[0, 2::4] = self.pf[FM]
