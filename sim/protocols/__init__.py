@@ -7,6 +7,7 @@ Modules (imported lazily by their users; importing this package does nothing):
   ``run_biaxial`` -> :class:`~sim.protocols.report.TestResult`;
 - :mod:`~sim.protocols.loading`: platens, gauges, crack tallies, the loading loop, defaults;
 - :mod:`~sim.protocols.resume`: continue an interrupted test from its results directory;
+- :mod:`~sim.protocols.ensemble`: ``run_ensemble``, N perturbed runs of one test, mean ± sd;
 - :mod:`~sim.protocols.outputs`: summary.json, history.csv, cracks.csv, figures (atomic);
 - :mod:`~sim.protocols.parameters`: micro-parameter YAML files;
 - :mod:`~sim.protocols.calibration`: the DEM black box of :func:`sim.calibrate.calibrate`;
