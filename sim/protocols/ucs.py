@@ -193,6 +193,11 @@ def run_ucs(specimen, *, strain_rate: float | None = None,
                                                       "tan_slow", "peak_drop", "window",
                                                       "rise", "ke_ratio", "f_peak",
                                                       "tan_peak")})
+    if resume:
+        rs.check_options(prev, options, ("strain_rate_per_s", "platen_velocity_m_per_s",
+                                         "adaptive", "adaptive_rule", "post_peak",
+                                         "max_strain", "damping", "timestep_factor",
+                                         "record_strain"))
     loop = ld.LoadingLoop(sim=sim, record=record, chunk=chunk, max_steps=max_steps, stop=stop,
                           on_chunk=on_chunk, progress=progress, desc="ucs", speed=speed,
                           checkpoint_every=checkpoint_every,

@@ -303,6 +303,13 @@ def test_ucs_interrupted_and_resumed_gives_the_uninterrupted_result(rock, tmp_pa
     part = json.loads((out / "summary.json").read_text())
     assert part["stop_reason"] == "interrupted" and (out / "checkpoint.npz").exists()
     assert 0 < part["steps"] < ref.summary["steps"]
+    files = {p.name: p.read_bytes() for p in out.iterdir()}
+    for other, name in (({"strain_rate": 2 * RATE}, "strain_rate_per_s"),
+                        ({"strain_rate": RATE, "adaptive": False}, "adaptive"),
+                        ({"strain_rate": RATE, "damping": 0.5}, "damping")):
+        with pytest.raises(ValueError, match=f"options.{name}"):   # checked, nothing written
+            run_ucs(rock, progress=False, out=out, figures=False, resume=True, **other)
+    assert {p.name: p.read_bytes() for p in out.iterdir()} == files
     res = run_ucs(rock, strain_rate=RATE, progress=False, out=out, figures=False, resume=True)
     a, b = ref.summary, res.summary
     assert b["stop_reason"] == "post_peak" and b["steps"] == a["steps"]
