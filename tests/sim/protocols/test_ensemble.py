@@ -38,6 +38,14 @@ def snapshot(folder):
             for p in sorted(folder.rglob("*")) if p.is_file()}
 
 
+def test_docstring_examples():
+    import doctest
+
+    from sim.protocols import ensemble
+    r = doctest.testmod(ensemble)
+    assert r.attempted >= 8 and r.failed == 0
+
+
 def test_perturb_moves_every_centre_by_the_amplitude(rock):
     p0 = perturb(rock, 0)
     assert np.array_equal(p0.x, rock.x) and np.array_equal(p0.y, rock.y)
@@ -61,9 +69,9 @@ def test_perturb_moves_every_centre_by_the_amplitude(rock):
 
 def test_stats_are_those_of_the_members():
     m = pd.DataFrame({"member": [0, 1, 2, 3], "ucs_mpa": [100.0, 110.0, 120.0, np.nan],
-                      "one": [1.0, np.nan, np.nan, np.nan]})
+                      "one": [1.0, np.nan, np.nan, np.nan], "none": [np.nan] * 4})
     t = ensemble_stats(m)
-    assert "member" not in t.index
+    assert "member" not in t.index and "none" not in t.index
     r = t.loc["ucs_mpa"]
     assert (r["n"], r["mean"], r["sd"], r["min"], r["max"]) == (3, 110.0, 10.0, 100.0, 120.0)
     assert r["sem"] == pytest.approx(10.0 / math.sqrt(3), rel=1e-12)
