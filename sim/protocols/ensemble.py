@@ -50,6 +50,9 @@ CURVES = {"ucs": ("axial_strain", "axial_stress_mpa"),
           "biaxial": ("axial_strain", "axial_stress_mpa"),
           "tension": ("tensile_strain", "tensile_stress_mpa"),
           "brazilian": ("axial_strain", "brazilian_stress_mpa")}
+#: Test name -> the summary entry of its peak stress (drawn on the curves figure).
+PEAKS = {"ucs": "ucs_mpa", "biaxial": "ucs_mpa", "tension": "tensile_mpa",
+         "brazilian": "tensile_mpa"}
 #: Summary entries that describe the set-up or the machine, not the test's outcome.
 NOT_RESULTS = frozenset({"n_particles", "n_bonds", "dt_s", "particle_steps_per_s",
                          "force_chunks", "threads"})
@@ -273,17 +276,28 @@ def _member_state(d) -> str:
     return "partial" if os.path.exists(os.path.join(d, "checkpoint.npz")) else "new"
 
 
-def plot_curves(histories, path, *, test: str, title: str = "") -> str:
-    """Every member's stress-strain curve in one figure (member 0 in black)."""
+def plot_curves(histories, path, *, test: str, title: str = "", peak=None) -> str:
+    """Every member's stress-strain curve in one figure (member 0 in black, on top).
+
+    ``peak``: (mean, sd) of the peak stress, drawn as a line and a band.
+    """
     from .outputs import _pyplot, _save_figure
     plt = _pyplot()
     xcol, ycol = CURVES[test]
     fig, ax = plt.subplots(figsize=(6.4, 4.6))
-    for k, h in enumerate(histories):
+    n = len(histories)
+    for k in [*range(1, n), 0][:n]:
+        h = histories[k]
         if xcol in h and ycol in h:
-            ax.plot(np.asarray(h[xcol]) * 1e3, h[ycol], lw=1.4 if k == 0 else 0.8,
-                    color="k" if k == 0 else plt.cm.viridis(k / max(1, len(histories) - 1)),
-                    label="member 0 (unperturbed)" if k == 0 else None, alpha=1 if k == 0 else 0.8)
+            ax.plot(np.asarray(h[xcol]) * 1e3, h[ycol], lw=1.2 if k == 0 else 0.8,
+                    color="k" if k == 0 else plt.cm.viridis(k / max(1, n - 1)),
+                    label="member 0 (unperturbed)" if k == 0 else None,
+                    alpha=1 if k == 0 else 0.8)
+    if peak is not None and np.all(np.isfinite(peak)):
+        mean, sd = peak
+        ax.axhline(mean, color="tab:red", ls=":", lw=0.9,
+                   label=f"peak {mean:.1f} ± {sd:.1f} (mean ± sd)")
+        ax.axhspan(mean - sd, mean + sd, color="tab:red", alpha=0.12, lw=0)
     ax.set_xlabel(f"{xcol} (10^-3)")
     ax.set_ylabel(f"{ycol}")
     ax.set_title(title, fontsize=9)
@@ -412,8 +426,10 @@ def run_ensemble(test: str, specimen, *, runs: int, amplitude: float = DEFAULT_A
     status = "complete"
     members, stats, summary, files = write()
     if out is not None and figures:
+        key = PEAKS[test]
         files["ensemble_curves.png"] = plot_curves(
             histories, os.path.join(out, "ensemble_curves.png"), test=test,
-            title=f"{test}: {runs} members, centres perturbed by {amplitude:g} x mean radius")
+            title=f"{test}: {runs} members, centres perturbed by {amplitude:g} x mean radius",
+            peak=(stats.loc[key, "mean"], stats.loc[key, "sd"]) if key in stats.index else None)
     return EnsembleResult(members=members, stats=stats, summary=summary,
                           histories=histories, files=files)

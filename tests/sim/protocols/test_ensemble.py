@@ -261,11 +261,11 @@ def test_cli_ensemble(tmp_path, capsys):
                                        ("brazilian", "tensile_mpa"), ("biaxial", "ucs_mpa")])
 def test_the_other_tests_run_as_ensembles(rock, tmp_path, test, key):
     """Member 0 is the plain test; the curves figure finds each test's columns."""
-    from sim.protocols.ensemble import CURVES, _test_function
+    from sim.protocols.ensemble import CURVES, PEAKS, _test_function
     res = run_ensemble(test, rock, runs=2, strain_rate=RATE, out=tmp_path, progress=False)
     plain = _test_function(test)(rock, strain_rate=RATE, progress=False)
     assert res.members[key].iloc[0] == pytest.approx(plain.summary[key], rel=1e-12)
     assert np.all(np.isfinite(res.members[key])) and res.mean(key) > 1
-    assert all(c in h for h in res.histories for c in CURVES[test])
+    assert all(c in h for h in res.histories for c in CURVES[test]) and PEAKS[test] == key
     assert (tmp_path / "ensemble_curves.png").exists()
     assert (tmp_path / "member_01" / "summary.json").exists()
