@@ -241,8 +241,8 @@ def _config(test, fn, specimen, amplitude, test_kw) -> dict:
                                         if k not in skip}})
 
 
-def _check_resume(path, config) -> dict:
-    """The ``ensemble.json`` at ``path``, checked against ``config`` (ValueError names it)."""
+def _check_resume(path, config) -> None:
+    """Check the ``ensemble.json`` at ``path`` against ``config`` (ValueError names it)."""
     if not os.path.exists(path):
         raise FileNotFoundError(f"cannot resume: missing {path}")
     try:
@@ -258,7 +258,21 @@ def _check_resume(path, config) -> dict:
                     f"{old['config'].get(k)!r}, this run {config[k]!r}")
             raise ValueError(f"cannot resume: {path} has config.{k} = {what}; give the "
                              "interrupted ensemble's specimen and options")
-    return old
+
+
+def _clear(out) -> None:
+    """Remove a previous ensemble's members and files from ``out`` (a fresh run replaces it,
+    so that a later resume cannot take a member of the old one for its own)."""
+    import re
+    import shutil
+    if not os.path.isdir(out):
+        return
+    for name in os.listdir(out):
+        p = os.path.join(out, name)
+        if re.fullmatch(r"member_\d{2,}", name) and os.path.isdir(p):
+            shutil.rmtree(p)
+        elif name in ("ensemble.csv", "ensemble_curves.png"):
+            os.remove(p)
 
 
 def _member_state(d) -> str:
@@ -326,7 +340,8 @@ def run_ensemble(test: str, specimen, *, runs: int, amplitude: float = DEFAULT_A
         Continue an ensemble in ``out``: finished members are read, not run; an interrupted
         member resumes from its checkpoint; the rest run. ``test``, ``amplitude``, the
         specimen and the test options must be those of ``ensemble.json`` (checked before
-        anything runs); ``runs`` may be larger.
+        anything runs); ``runs`` may be larger. Without it, an ensemble already in ``out``
+        is replaced (its ``member_KK/`` directories are removed first).
     progress, figures : bool
         Progress bars (one over the members, one per member); PNG figures.
     **test_kw
@@ -366,6 +381,8 @@ def run_ensemble(test: str, specimen, *, runs: int, amplitude: float = DEFAULT_A
         if out is None:
             raise ValueError("'resume' needs 'out' (the interrupted ensemble's directory)")
         _check_resume(path, config)
+    elif out is not None:
+        _clear(out)
     histories, rows = [], []
     status = "running"
 

@@ -195,6 +195,20 @@ def test_killed_in_the_first_member_resumes(rock, ensemble3, tmp_path, monkeypat
                                                         rel=1e-12), k
 
 
+def test_a_fresh_run_replaces_the_ensemble_in_out(rock, tmp_path):
+    """Without resume, an earlier ensemble's members go first: a later resume with more runs
+    must not read a member of the old ensemble (here: of another amplitude) as its own."""
+    kw = dict(strain_rate=RATE, out=tmp_path, progress=False, figures=False)
+    run_ensemble("ucs", rock, runs=3, amplitude=1e-6, **kw)
+    run_ensemble("ucs", rock, runs=2, **kw)
+    assert sorted(p.name for p in tmp_path.glob("member_*")) == ["member_00", "member_01"]
+    assert len(pd.read_csv(tmp_path / "ensemble.csv")) == 2
+    res = run_ensemble("ucs", rock, runs=3, resume=True, **kw)
+    m2 = json.loads((tmp_path / "member_02" / "summary.json").read_text())
+    assert m2["specimen"]["perturbation"]["amplitude_rel"] == 1e-9
+    assert len(res.members) == 3
+
+
 def test_resume_with_other_options_is_refused_and_writes_nothing(rock, ensemble3, tmp_path):
     _, out = ensemble3
     before = snapshot(out)
