@@ -163,58 +163,51 @@ def run_test_command(args) -> int:
     else:
         from .biaxial import run_biaxial as fn
         kw["confinement"] = args.confinement_mpa * 1e6
-    if args.ensemble:
-        return _run_ensemble(args, spec, kw)
-    if args.ensemble_amplitude is not None:
+    if args.ensemble_amplitude is not None and not args.ensemble:
         print("error: --ensemble-amplitude needs --ensemble N", file=sys.stderr)
         return 2
     if not args.resume:             # resuming writes nothing before its files are checked
         os.makedirs(args.out, exist_ok=True)
     try:
-        res = fn(spec, **{**kw, "out": args.out})
+        if args.ensemble:
+            res = _run_ensemble(args, spec, kw)
+        else:
+            res = fn(spec, **{**kw, "out": args.out})
     except KeyboardInterrupt:
-        print(f"interrupted: checkpoint and partial results in {args.out}", file=sys.stderr)
+        what = ("finished members and the checkpoint of the running one"
+                if args.ensemble else "checkpoint and partial results")
+        print(f"interrupted: {what} in {args.out}; continue with --resume", file=sys.stderr)
         return 130
     except (InputError, ValueError, FileNotFoundError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
-    s = res.summary
-    keys = ("E_gpa", "nu", "ucs_mpa", "ci_mpa", "cd_mpa", "tensile_mpa", "steps", "wall_s")
     from .outputs import json_ready
-    print(json.dumps(json_ready({k: s[k] for k in keys if k in s})))
+    if args.ensemble:
+        st = res.stats
+        report = {"runs": len(res.members), **{
+            k: {"mean": st.loc[k, "mean"], "sd": st.loc[k, "sd"], "ci95": st.loc[k, "ci95"]}
+            for k in _ENSEMBLE_KEYS if k in st.index}}
+    else:
+        report = {k: res.summary[k] for k in _KEYS if k in res.summary}
+    print(json.dumps(json_ready(report)))
     return 0
 
 
-#: Numbers the ensemble command prints (those the test reports).
+#: Numbers the test command prints.
+_KEYS = ("E_gpa", "nu", "ucs_mpa", "ci_mpa", "cd_mpa", "tensile_mpa", "steps", "wall_s")
+#: Numbers the ensemble command prints (mean, sd, ci95 of those the test reports).
 _ENSEMBLE_KEYS = ("E_gpa", "nu", "ucs_mpa", "ci_mpa", "cd_mpa", "tensile_mpa",
                   "deviatoric_peak_mpa", "P_sim.by_area", "cracks.total", "steps", "wall_s")
 
 
-def _run_ensemble(args, spec, kw) -> int:
+def _run_ensemble(args, spec, kw):
     """``--ensemble N``: :func:`sim.protocols.ensemble.run_ensemble` with the test's options."""
-    from ..errors import InputError
     from .ensemble import DEFAULT_AMPLITUDE, run_ensemble
     amp = DEFAULT_AMPLITUDE if args.ensemble_amplitude is None else args.ensemble_amplitude
     test_kw = {k: v for k, v in kw.items() if k not in ("out", "resume", "progress", "figures")}
-    if not args.resume:
-        os.makedirs(args.out, exist_ok=True)
-    try:
-        res = run_ensemble(args.test, spec, runs=args.ensemble, amplitude=amp, out=args.out,
-                           resume=args.resume, progress=not args.no_progress,
-                           figures=kw["figures"], **test_kw)
-    except KeyboardInterrupt:
-        print(f"interrupted: finished members and the checkpoint of the running one in "
-              f"{args.out}; continue with --resume", file=sys.stderr)
-        return 130
-    except (InputError, ValueError, FileNotFoundError) as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 2
-    from .outputs import json_ready
-    st = res.stats
-    print(json.dumps(json_ready({"runs": len(res.members), **{
-        k: {"mean": st.loc[k, "mean"], "sd": st.loc[k, "sd"], "ci95": st.loc[k, "ci95"]}
-        for k in _ENSEMBLE_KEYS if k in st.index}})))
-    return 0
+    return run_ensemble(args.test, spec, runs=args.ensemble, amplitude=amp, out=args.out,
+                        resume=args.resume, progress=kw["progress"], figures=kw["figures"],
+                        **test_kw)
 
 
 def run_calibrate_command(args) -> int:

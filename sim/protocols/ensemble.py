@@ -427,9 +427,8 @@ def run_ensemble(test: str, specimen, *, runs: int, amplitude: float = DEFAULT_A
                 write()
             if bar is not None:
                 bar.update(1)
-                if "ucs_mpa" in rows[-1] or "tensile_mpa" in rows[-1]:
-                    key = "ucs_mpa" if "ucs_mpa" in rows[-1] else "tensile_mpa"
-                    bar.set_postfix({key: f"{rows[-1][key]:.1f}"})
+                if PEAKS[test] in rows[-1]:
+                    bar.set_postfix({PEAKS[test]: f"{rows[-1][PEAKS[test]]:.1f}"})
     except KeyboardInterrupt:
         if out is not None:
             from .loading import second_ctrl_c_waits

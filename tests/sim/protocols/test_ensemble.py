@@ -5,7 +5,6 @@ damping's sign(v), bond breakage), and only by the perturbation's size when it i
 statistics are those of the members; Ctrl-C and a resume give the uninterrupted ensemble; a
 resume with other options is refused before anything is written.
 """
-import argparse
 import json
 import math
 
@@ -16,7 +15,6 @@ from _interrupt import kill_after_partial_writes
 from _specimens import random_specimen
 
 from sim import Specimen
-from sim.protocols import cli
 from sim.protocols.ensemble import ensemble_stats, member_dir, perturb, result_numbers, run_ensemble
 from sim.protocols.ucs import run_ucs
 
@@ -241,15 +239,13 @@ def test_resume_with_other_options_is_refused_and_writes_nothing(rock, ensemble3
         run_ensemble("shear", rock, runs=2)
 
 
-def test_cli_ensemble(tmp_path, capsys):
+def test_cli_ensemble(tmp_path, capsys, gbmsim_parser):
     s = Specimen.lattice(nx=8, ny=16, radius=1e-3, gap=2e-3)
     s.save(tmp_path / "lat.npz")
-    parser = argparse.ArgumentParser(prog="gbmsim")
-    cli.register(parser.add_subparsers(dest="command", required=True))
     out = tmp_path / "res"
 
     def gbmsim(*argv):
-        args = parser.parse_args(["ucs", str(tmp_path / "lat.npz"), "--out", str(out),
+        args = gbmsim_parser.parse_args(["ucs", str(tmp_path / "lat.npz"), "--out", str(out),
                                   "--max-strain", "2e-4", "--strain-rate", "2",
                                   "--no-progress", *argv])
         return args.func(args)

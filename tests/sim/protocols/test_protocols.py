@@ -212,14 +212,10 @@ def test_ctrl_c_leaves_checkpoint_and_partial_outputs(rock, tmp_path, monkeypatc
     assert math.isfinite(float(sim.x.sum()))
 
 
-def test_cli_runs_ucs_and_reports_bad_input(tmp_path, capsys):
-    import argparse
-
-    from sim.protocols import cli
+def test_cli_runs_ucs_and_reports_bad_input(tmp_path, capsys, gbmsim_parser):
+    parser = gbmsim_parser
     s = Specimen.lattice(nx=8, ny=16, radius=1e-3, gap=2e-3)
     s.save(tmp_path / "lat.npz")
-    parser = argparse.ArgumentParser(prog="gbmsim")
-    cli.register(parser.add_subparsers(dest="command", required=True))
     out = tmp_path / "res"
     args = parser.parse_args(["ucs", str(tmp_path / "lat.npz"), "--out", str(out),
                               "--max-strain", "2e-4", "--strain-rate", "2", "--no-progress",

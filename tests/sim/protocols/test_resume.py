@@ -5,7 +5,6 @@ A run interrupted by Ctrl-C, or killed right after a periodic checkpoint, and co
 test_protocols.py). A results directory that cannot be resumed fails with a message naming the
 file and what was expected, and is left as it was.
 """
-import argparse
 import json
 import math
 import shutil
@@ -15,7 +14,6 @@ import pytest
 from _interrupt import ctrl_c_at_step, kill_after_partial_writes
 from _specimens import random_specimen
 
-from sim.protocols import cli
 from sim.protocols.biaxial import run_biaxial
 from sim.protocols.brazilian import run_brazilian
 from sim.protocols.tension import run_tension
@@ -264,16 +262,13 @@ def test_biaxial_resume_needs_the_consolidated_state(rock, tmp_path, monkeypatch
 
 
 def test_cli_resumes_tension_brazilian_biaxial(rock, reference, tmp_path, monkeypatch,
-                                               capsys):
+                                               capsys, gbmsim_parser):
     """``gbmsim TEST SPEC --out DIR --resume`` for the three tests; bad resumes exit 2 with
     the message and write nothing."""
     spec = tmp_path / "rock.npz"
     rock.save(spec)
-    parser = argparse.ArgumentParser(prog="gbmsim")
-    cli.register(parser.add_subparsers(dest="command", required=True))
-
     def gbmsim(*argv):
-        args = parser.parse_args([*argv, "--strain-rate", str(RATE), "--no-progress",
+        args = gbmsim_parser.parse_args([*argv, "--strain-rate", str(RATE), "--no-progress",
                                   "--no-figures"])
         return args.func(args)
 
