@@ -55,6 +55,28 @@ def test_ucs_lattice_with_unbreakable_bonds_matches_lattice_formula():
     assert (h["lateral_strain"].iloc[-1] < 0) and (h["gauge_lateral_strain"].iloc[-1] < 0)
 
 
+@pytest.mark.parametrize("factor, sign", [(0.1, -1), (10.0, +1)])
+def test_more_grain_boundary_lowers_e_with_soft_joints_and_raises_it_with_stiff(factor, sign):
+    """E follows the joint share monotonically, its direction set by the joint stiffness.
+
+    One packing, unbreakable bonds and joints, cut into 6 or 40 Voronoi grains: more grains
+    means more smooth joints. Joints 10x softer than the default (pb_emod / 2 r) lower E as
+    they multiply; 10x stiffer, they raise it (benchmarks/joint_stiffness_trend.py measures
+    the same on gbmgen specimens).
+    """
+    base = 60e9 / (2 * 0.25e-3)
+    e = []
+    for n_grains in (6, 40):
+        s = random_specimen(0.005, 0.010, 0.25e-3, seed=1, n_grains=n_grains, pb_ten=1e12,
+                            pb_coh=1e12, sj_ten=1e12, sj_coh=1e12, sj_kn=factor * base,
+                            sj_ks=factor * base / 2)
+        sm = run_ucs(s, max_strain=1e-3, post_peak=None, strain_rate=RATE, adaptive=False,
+                     progress=False, figures=False).summary
+        assert sm["cracks"]["total"] == 0
+        e.append(sm["E_gpa"])
+    assert sign * (e[1] / e[0] - 1) > 0.05
+
+
 @pytest.mark.parametrize("fraction", [0.8, 0.5])
 def test_ucs_stops_after_peak_at_requested_fraction(rock, fraction, tmp_path):
     res = run_ucs(rock, post_peak=fraction, strain_rate=RATE, progress=False,
