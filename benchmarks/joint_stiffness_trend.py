@@ -20,6 +20,8 @@ import json
 import os
 import time
 
+from ucs_scenarios import read_rows
+
 PRESET = os.path.join(os.path.dirname(__file__), "ucs_results", "calibration_10x20_dt06",
                       "calibrated_params.yaml")
 # (scenario, grain-size factor, label); 1.357 puts S4 at S1's grain count (the control)
@@ -88,21 +90,15 @@ def main(argv=None):
                    help="comma-separated joint_stiffness.json files: only print their table")
     a = p.parse_args(argv)
     if a.merge:
-        rows = []
-        for path in a.merge.split(","):
-            with open(path) as f:
-                rows += json.load(f)
-        print(markdown_table(rows))
+        print(markdown_table(read_rows(a.merge)))
         return 0
     import numpy as np
 
-    import gbmgen
     from gbmgen.build import build_specimen
-    from gbmgen.table import read_table
+    from gbmgen.table import example_table
     from sim.protocols.parameters import apply_parameters, load_parameters
     from sim.protocols.ucs import run_ucs
-    table = read_table(os.path.join(os.path.dirname(gbmgen.__file__), "presets",
-                                    "table_4_1.csv"))
+    table = example_table("table-4-1")
     params = load_parameters(a.params)
     wanted = [c.strip() for c in a.cases.split(",")]
     cases = [c for c in CASES if c[2] in wanted]

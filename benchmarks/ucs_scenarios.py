@@ -43,6 +43,15 @@ def markdown_table(rows):
     return "\n".join(lines) + "\n"
 
 
+def read_rows(paths):
+    """The rows of comma-separated result JSON files (lists of dicts), joined."""
+    rows = []
+    for path in paths.split(","):
+        with open(path) as f:
+            rows += json.load(f)
+    return rows
+
+
 def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--params", default=None, help="parameter YAML (default start_parameters)")
@@ -62,11 +71,7 @@ def main(argv=None):
                    help="comma-separated ucs_scenarios.json files: only print their joint table")
     a = p.parse_args(argv)
     if a.merge:
-        rows = []
-        for path in a.merge.split(","):
-            with open(path) as f:
-                rows += json.load(f)
-        print(markdown_table(rows))
+        print(markdown_table(read_rows(a.merge)))
         return 0
     import numpy as np
 
