@@ -101,6 +101,9 @@ def main(argv=None):
     table = example_table("table-4-1")
     params = load_parameters(a.params)
     wanted = [c.strip() for c in a.cases.split(",")]
+    unknown = sorted(set(wanted) - {c[2] for c in CASES})
+    if unknown:
+        p.error(f"--cases: unknown {unknown}, expected some of {[c[2] for c in CASES]}")
     cases = [c for c in CASES if c[2] in wanted]
     factors = [float(x) for x in a.factors.split(",")]
     rows = []
