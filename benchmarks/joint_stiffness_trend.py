@@ -20,7 +20,7 @@ import json
 import os
 import time
 
-from ucs_scenarios import read_rows
+from ucs_scenarios import read_rows, write_rows
 
 PRESET = os.path.join(os.path.dirname(__file__), "ucs_results", "calibration_10x20_dt06",
                       "calibrated_params.yaml")
@@ -131,12 +131,7 @@ def main(argv=None):
     rate = np.median([r["particle_steps_per_s"] for r in rows])
     text += (f"\nmedian throughput {rate / 1e6:.1f} M particle-steps/s over {len(rows)} elastic "
              f"runs to strain {a.max_strain:g}\n")
-    os.makedirs(a.out, exist_ok=True)
-    with open(os.path.join(a.out, "joint_stiffness.json"), "w") as f:
-        json.dump(rows, f, indent=2)
-    with open(os.path.join(a.out, "joint_stiffness.md"), "w") as f:
-        f.write(text)
-    print(text)
+    write_rows(a.out, "joint_stiffness", rows, text)
     return 0
 
 

@@ -52,6 +52,16 @@ def read_rows(paths):
     return rows
 
 
+def write_rows(out, name, rows, text):
+    """Write ``rows`` to ``out/name.json`` and the table ``text`` to ``out/name.md``; print it."""
+    os.makedirs(out, exist_ok=True)
+    with open(os.path.join(out, f"{name}.json"), "w") as f:
+        json.dump(rows, f, indent=2)
+    with open(os.path.join(out, f"{name}.md"), "w") as f:
+        f.write(text)
+    print(text)
+
+
 def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--params", default=None, help="parameter YAML (default start_parameters)")
@@ -111,13 +121,7 @@ def main(argv=None):
                          "force_chunks": s["force_chunks"], "threads": s["threads"],
                          "params": a.params})
             print(json.dumps(rows[-1]), flush=True)
-    text = markdown_table(rows)
-    os.makedirs(a.out, exist_ok=True)
-    with open(os.path.join(a.out, "ucs_scenarios.json"), "w") as f:
-        json.dump(rows, f, indent=2)
-    with open(os.path.join(a.out, "ucs_scenarios.md"), "w") as f:
-        f.write(text)
-    print(text)
+    write_rows(a.out, "ucs_scenarios", rows, markdown_table(rows))
     return 0
 
 
