@@ -195,8 +195,8 @@ def build_specimen(table: GrainSizeTable | None = None, *, width_mm, height_mm, 
                    grain_area_mm2=config.GRAIN_AREA_MM2, ranges_mm=None,
                    particle_radius_mm=config.PARTICLE_RADIUS_MM,
                    radius_ratio=config.RADIUS_RATIO, porosity=config.POROSITY,
-                   bond_gap_mm=None, params: str | Params = config.DEFAULT_PARAMS,
-                   seed=None):
+                   seat_faces=config.SEAT_FACES, bond_gap_mm=None,
+                   params: str | Params = config.DEFAULT_PARAMS, seed=None):
     """A bonded grain-based specimen (``specimen.npz`` v1) from a grain-size table.
 
     Parameters
@@ -210,6 +210,10 @@ def build_specimen(table: GrainSizeTable | None = None, *, width_mm, height_mm, 
         rmax / rmin (thesis 1.66).
     porosity : float
         Target porosity of the packing (2D).
+    seat_faces : bool
+        Seat the packing on the four box faces (:func:`gbmgen.faces.seat_faces`: no dents
+        under a platen). Default on; off reproduces, seed for seed, the specimens built
+        before seating existed (the results in benchmarks/ up to the seventh session).
     bond_gap_mm : float, optional
         Bond gap, mm; default ``BOND_GAP_PER_RADIUS`` x mean radius (thesis 0.05 mm at 0.1 mm).
     params : str or Params
@@ -248,7 +252,7 @@ def build_specimen(table: GrainSizeTable | None = None, *, width_mm, height_mm, 
     t0 = time.perf_counter()
     r_mean = particle_radius_mm * 1e-3
     x, y, r, pinfo = pack_particles(box, radius_mean_m=r_mean, radius_ratio=radius_ratio,
-                                    porosity=porosity, rng=prng)
+                                    porosity=porosity, rng=prng, seat_faces=seat_faces)
     timing["particles"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     grain = particles_to_grains(x, y, g.xy, g.offsets, box)

@@ -58,6 +58,8 @@ def _add_model_options(b):
                    help="mean particle radius [%(default)s]")
     b.add_argument("--radius-ratio", type=float, default=config.RADIUS_RATIO)
     b.add_argument("--porosity", type=float, default=config.POROSITY)
+    b.add_argument("--no-seat-faces", dest="seat_faces", action="store_false",
+                   help="leave the packing's dents along the box faces (earlier specimens)")
     b.add_argument("--bond-gap-mm", type=float, default=None,
                    help=f"default {config.BOND_GAP_PER_RADIUS} x mean particle radius")
     b.add_argument("--params", default=config.DEFAULT_PARAMS,
@@ -234,7 +236,8 @@ def _build(a):
         model_scale=a.model_scale, tessellation=a.tessellation, fit_areas=a.fit_areas,
         shape=a.shape, slenderness=a.slenderness, grain_area_mm2=a.grain_area_mm2,
         ranges_mm=a.ranges_mm, particle_radius_mm=a.particle_radius_mm, radius_ratio=a.radius_ratio,
-        porosity=a.porosity, bond_gap_mm=a.bond_gap_mm, params=a.params, seed=a.seed)
+        porosity=a.porosity, seat_faces=a.seat_faces, bond_gap_mm=a.bond_gap_mm,
+        params=a.params, seed=a.seed)
     t1 = time.perf_counter()
     spec.save(a.out)
     timing["save"] = time.perf_counter() - t1
@@ -269,8 +272,8 @@ def _run(a):
                   width_mm=a.width_mm, height_mm=a.height_mm,
                   tessellation=a.tessellation, fit_areas=a.fit_areas,
                   particle_radius_mm=a.particle_radius_mm, radius_ratio=a.radius_ratio,
-                  porosity=a.porosity, bond_gap_mm=a.bond_gap_mm, params=a.params,
-                  test=a.test, test_options={"post_peak": a.post_peak})
+                  porosity=a.porosity, seat_faces=a.seat_faces, bond_gap_mm=a.bond_gap_mm,
+                  params=a.params, test=a.test, test_options={"post_peak": a.post_peak})
     print(json.dumps(summary, indent=1, default=str))
     ts, ps = summary.get("test_summary") or {}, summary.get("P_sem") or {}
     if ts.get("P_sim") and ps.get("P_pooled") is not None:

@@ -54,6 +54,14 @@ PARTICLE_MAX_ITER = 6000
 GROW_FROM = 0.85
 GROW_STEPS = 4
 GROW_ITER = 40
+#: Seat the particle packing on the box faces (flat specimen ends; gbmgen.faces).
+SEAT_FACES = True
+#: Face seating: a particle within this many of its radii of a face moves onto it,
+SEAT_CAPTURE_RADII = 1.0
+#: an open stretch of a face longer than this many mean diameters receives a particle,
+SEAT_MAX_OPEN_DIAMETERS = 2.5
+#: in at most this many snap-fill-relax rounds.
+SEAT_ROUNDS = 6
 
 # ---------------------------------------------------------------- bonds
 #: Thesis App. E: bond gap 0.5e-4 m with 0.1 mm particles -> 0.5 x the mean particle radius.

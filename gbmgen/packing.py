@@ -14,6 +14,7 @@ from sim.relax import relax_overlaps
 
 from . import config
 from .errors import InputError
+from .faces import seat_faces as _seat_faces
 from .table import GrainSizeTable
 
 __all__ = ["Seeds", "sample_grain_sizes", "pack_seeds", "pack_particles", "particle_radii"]
@@ -165,7 +166,7 @@ def particle_radii(radius_mean_m, radius_ratio):
 
 def pack_particles(box, *, radius_mean_m, radius_ratio=config.RADIUS_RATIO,
                    porosity=config.POROSITY, rng, tol=config.PARTICLE_OVERLAP_TOL,
-                   max_iter=config.PARTICLE_MAX_ITER):
+                   max_iter=config.PARTICLE_MAX_ITER, seat_faces=config.SEAT_FACES):
     """Isotropic random disk packing of the box at a target porosity.
 
     Parameters
@@ -180,6 +181,9 @@ def pack_particles(box, *, radius_mean_m, radius_ratio=config.RADIUS_RATIO,
     rng : numpy.random.Generator
     tol, max_iter
         Relaxation target (largest overlap / smaller radius) and step limit.
+    seat_faces : bool
+        Close the dents along the four box faces afterwards (:func:`gbmgen.faces.seat_faces`),
+        so that a platen on any face touches particles all along it. Default on.
 
     Returns
     -------
@@ -187,7 +191,7 @@ def pack_particles(box, *, radius_mean_m, radius_ratio=config.RADIUS_RATIO,
         Sorted along rows of cells (neighbours near in memory).
     info : dict
         ``n``, ``porosity`` (realised, from the disk areas), ``max_overlap``, ``iterations``,
-        ``converged``.
+        ``converged``, and ``seating`` (the report of :func:`gbmgen.faces.seat_faces`, or None).
 
     Notes
     -----
@@ -217,10 +221,15 @@ def pack_particles(box, *, radius_mean_m, radius_ratio=config.RADIUS_RATIO,
         x, y, inf = relax_overlaps(x, y, r * s, box, tol=tol, max_iter=config.GROW_ITER)
         total += inf["iterations"]
     x, y, info = relax_overlaps(x, y, r, box, tol=tol, max_iter=max_iter)
+    seating = None
+    if seat_faces:
+        x, y, r, seating = _seat_faces(x, y, r, box, rmin=rmin, rmax=rmax, rng=rng, tol=tol,
+                                       max_iter=max_iter)
+        info = dict(info, max_overlap=seating["max_overlap"], converged=seating["converged"])
     o = _cell_order(x, y, 4.0 * radius_mean_m)
     x, y, r = x[o], y[o], r[o]
     info = dict(info, iterations=info["iterations"] + total, n=int(r.size),
-                porosity=float(1.0 - np.sum(np.pi * r * r) / area))
+                porosity=float(1.0 - np.sum(np.pi * r * r) / area), seating=seating)
     if not info["converged"]:
         warnings.warn(f"particle packing: largest overlap {info['max_overlap']:.3f} of a radius "
                       f"after {info['iterations']} steps, above the tolerance {tol:g}; the "
