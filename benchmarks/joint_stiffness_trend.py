@@ -84,6 +84,8 @@ def main(argv=None):
     p.add_argument("--width-mm", type=float, default=10.0)
     p.add_argument("--height-mm", type=float, default=20.0)
     p.add_argument("--particle-radius-mm", type=float, default=0.1)
+    p.add_argument("--no-seat-faces", dest="seat_faces", action="store_false",
+                   help="specimens without face seating (the results up to the seventh session)")
     p.add_argument("--max-strain", type=float, default=1e-3)
     p.add_argument("--out", default="benchmarks/results/joint_stiffness")
     p.add_argument("--merge", default=None,
@@ -111,7 +113,8 @@ def main(argv=None):
         for seed in map(int, a.seeds.split(",")):
             spec0, _ = build_specimen(table, width_mm=a.width_mm, height_mm=a.height_mm,
                                       scenario=sc, scale=scale,
-                                      particle_radius_mm=a.particle_radius_mm, seed=seed)
+                                      particle_radius_mm=a.particle_radius_mm, seed=seed,
+                                      seat_faces=a.seat_faces)
             for f in factors:
                 spec = apply_parameters(spec0, elastic_params(params, f))
                 t0 = time.perf_counter()

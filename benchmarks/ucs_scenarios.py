@@ -68,6 +68,8 @@ def main(argv=None):
     p.add_argument("--width-mm", type=float, default=4.0)
     p.add_argument("--height-mm", type=float, default=8.0)
     p.add_argument("--particle-radius-mm", type=float, default=0.1)
+    p.add_argument("--no-seat-faces", dest="seat_faces", action="store_false",
+                   help="specimens without face seating (the results up to the seventh session)")
     p.add_argument("--seeds", default="1,2")
     p.add_argument("--scenarios", default="1,2,3,4")
     p.add_argument("--scales", default="1.0,1.5",
@@ -105,7 +107,8 @@ def main(argv=None):
         for seed in map(int, a.seeds.split(",")):
             spec, _ = build_specimen(table, width_mm=a.width_mm, height_mm=a.height_mm,
                                      scenario=sc, scale=scale,
-                                     particle_radius_mm=a.particle_radius_mm, seed=seed)
+                                     particle_radius_mm=a.particle_radius_mm, seed=seed,
+                                     seat_faces=a.seat_faces)
             prm = load_parameters(a.params) if a.params else start_parameters(spec)
             spec = apply_parameters(spec, prm)
             t0 = time.perf_counter()
@@ -119,7 +122,7 @@ def main(argv=None):
                          "nu": s["nu"], "cracks": s["cracks"]["total"],
                          "wall_s": time.perf_counter() - t0, "steps": s["steps"],
                          "force_chunks": s["force_chunks"], "threads": s["threads"],
-                         "params": a.params})
+                         "params": a.params, "seat_faces": a.seat_faces})
             print(json.dumps(rows[-1]), flush=True)
     write_rows(a.out, "ucs_scenarios", rows, markdown_table(rows))
     return 0

@@ -67,7 +67,7 @@ def test_calibrated_preset_is_the_calibration_result():
 
     import yaml
     path = (Path(__file__).resolve().parents[2] / "benchmarks" / "ucs_results"
-            / "calibration_10x20_dt06" / "calibrated_params.yaml")
+            / "calibration_10x20_seated" / "calibrated_params.yaml")
     cal = yaml.safe_load(path.read_text())
     p = load_params("thesis-ch4-calibrated")
     for m, fields in cal["minerals"].items():
