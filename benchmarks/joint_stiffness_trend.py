@@ -20,7 +20,7 @@ import json
 import os
 import time
 
-from ucs_scenarios import read_rows, write_rows
+from ucs_scenarios import add_specimen_options, read_rows, write_rows
 
 PRESET = os.path.join(os.path.dirname(__file__), "ucs_results", "calibration_10x20_dt06",
                       "calibrated_params.yaml")
@@ -81,11 +81,7 @@ def main(argv=None):
     p.add_argument("--seeds", default="1,2,3")
     p.add_argument("--cases", default=",".join(c[2] for c in CASES),
                    help="subset of: " + ", ".join(c[2] for c in CASES))
-    p.add_argument("--width-mm", type=float, default=10.0)
-    p.add_argument("--height-mm", type=float, default=20.0)
-    p.add_argument("--particle-radius-mm", type=float, default=0.1)
-    p.add_argument("--no-seat-faces", dest="seat_faces", action="store_false",
-                   help="specimens without face seating (the results up to the seventh session)")
+    add_specimen_options(p, width_mm=10.0, height_mm=20.0)
     p.add_argument("--max-strain", type=float, default=1e-3)
     p.add_argument("--out", default="benchmarks/results/joint_stiffness")
     p.add_argument("--merge", default=None,

@@ -62,14 +62,19 @@ def write_rows(out, name, rows, text):
     print(text)
 
 
-def main(argv=None):
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--params", default=None, help="parameter YAML (default start_parameters)")
-    p.add_argument("--width-mm", type=float, default=4.0)
-    p.add_argument("--height-mm", type=float, default=8.0)
+def add_specimen_options(p, *, width_mm, height_mm):
+    """The specimen options shared by the scenario benchmarks (size, particles, seating)."""
+    p.add_argument("--width-mm", type=float, default=width_mm)
+    p.add_argument("--height-mm", type=float, default=height_mm)
     p.add_argument("--particle-radius-mm", type=float, default=0.1)
     p.add_argument("--no-seat-faces", dest="seat_faces", action="store_false",
                    help="specimens without face seating (the results up to the seventh session)")
+
+
+def main(argv=None):
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--params", default=None, help="parameter YAML (default start_parameters)")
+    add_specimen_options(p, width_mm=4.0, height_mm=8.0)
     p.add_argument("--seeds", default="1,2")
     p.add_argument("--scenarios", default="1,2,3,4")
     p.add_argument("--scales", default="1.0,1.5",
