@@ -41,6 +41,18 @@ def _gaps(x, y, r, box, face):
     return box[3] - y - r, x
 
 
+def _touching(face, s, rho, box):
+    """Centre (cx, cy) of a disk of radius ``rho`` touching ``face`` at coordinate ``s``
+    (scalars or arrays)."""
+    if face == 0:
+        return box[0] + rho, s
+    if face == 1:
+        return box[1] - rho, s
+    if face == 2:
+        return s, box[2] + rho
+    return s, box[3] - rho
+
+
 def face_openings(x, y, r, box, *, touch=None):
     """Longest stretch of each face with no particle touching it.
 
@@ -74,14 +86,7 @@ def _room(s, xs, ys, rs, face, box, rmax):
     lo, hi = 0.0, rmax
     for _ in range(30):
         rho = 0.5 * (lo + hi)
-        if face == 0:
-            cx, cy = box[0] + rho, s
-        elif face == 1:
-            cx, cy = box[1] - rho, s
-        elif face == 2:
-            cx, cy = s, box[2] + rho
-        else:
-            cx, cy = s, box[3] - rho
+        cx, cy = _touching(face, s, rho, box)
         ok = np.all(np.hypot(xs - cx, ys - cy) >= rho + rs)
         lo, hi = (rho, hi) if ok else (lo, rho)
     return lo
@@ -118,9 +123,7 @@ def _fill(x, y, r, box, face, rmin, rmax, max_open, rng):
             full.add((a, b))
             continue
         rho = rmin + rng.random() * (room[k] - rmin)
-        c = cand[k]
-        new.append({0: (box[0] + rho, c), 1: (box[1] - rho, c), 2: (c, box[2] + rho),
-                    3: (c, box[3] - rho)}[face] + (rho,))
+        new.append(_touching(face, cand[k], rho, box) + (rho,))
     return new
 
 
@@ -166,16 +169,9 @@ def seat_faces(x, y, r, box, *, rmin, rmax, rng, faces=(0, 1, 2, 3),
     done = 0
     for done in range(1, rounds + 1):
         for face in faces:
-            g, _ = _gaps(x, y, r, box, face)
+            g, s = _gaps(x, y, r, box, face)
             m = (g > 0) & (g < capture * r)
-            if face == 0:
-                x[m] -= g[m]
-            elif face == 1:
-                x[m] += g[m]
-            elif face == 2:
-                y[m] -= g[m]
-            else:
-                y[m] += g[m]
+            x[m], y[m] = _touching(face, s[m], r[m], box)
         for face in faces:
             add = _fill(x, y, r, box, face, rmin, rmax, limit, rng)
             if add:
