@@ -20,8 +20,8 @@ from .field_geometry import distance_to_polygon, ray_exit_distance
 from .measure import pair_forces
 from .state import X, Y
 
-__all__ = ["particle_stress", "circle_stress", "kirsch", "kirsch_circle_mean", "stress_profile", "damage_depth",
-           "notches", "LINK_SIZES", "BIN_DEG", "NOTCH_MIN_DEPTH_SIZES"]
+__all__ = ["particle_stress", "circle_stress", "kirsch", "kirsch_circle_mean", "stress_profile",
+           "damage_depth", "notches", "LINK_SIZES", "BIN_DEG", "NOTCH_MIN_DEPTH_SIZES"]
 
 #: Breaks closer than this many crack sizes (bond diameters) are linked into one cluster, and a
 #: cluster this close to the profile is connected to the opening.

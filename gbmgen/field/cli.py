@@ -57,8 +57,8 @@ def register(sub):
 
 def openings_from_args(a):
     """The openings the flags ask for (list of dicts)."""
-    from . import openings as op
     from ..errors import InputError
+    from . import openings as op
     if a.opening == "circle":
         return [op.circle(radius_m=a.radius_m)]
     if a.opening == "drive":

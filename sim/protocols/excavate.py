@@ -80,10 +80,6 @@ def _scaled(poly, frac):
     return c + frac * (p - c)
 
 
-def _cracks_frame(sim):
-    return sim.cracks.to_frame()
-
-
 class _Run:
     """Bookkeeping of one excavation run: phases, history, checkpoints, progress bar."""
 

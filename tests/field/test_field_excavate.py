@@ -62,7 +62,7 @@ def test_elastic_circle_reproduces_kirsch(runs):
 
 
 def test_sleeping_particles_give_the_awake_result(runs):
-    (sa, da), (sb, db) = runs[False], runs[True]
+    (_, da), (sb, db) = runs[False], runs[True]
     h = pd.read_csv(db / "history.csv")
     assert h.loc[h["phase"] != "insitu", "asleep_fraction"].max() > 0.1   # sleep did engage
     ua, ub = pd.read_csv(da / "displacement.csv"), pd.read_csv(db / "displacement.csv")

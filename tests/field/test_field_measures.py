@@ -107,3 +107,17 @@ def test_damage_depth_and_notch_of_a_synthetic_v():
     # base chord ~1.2 m (to the 5 deg bins) and the V's apex angle 2 atan(0.6 / 0.6 + sag)
     assert n["height_m"] == pytest.approx(1.2, abs=0.2)
     assert 75 < n["angle_deg"] < 115
+
+
+def test_rays_into_a_joined_opening_are_not_measured():
+    """Two drives and a stope: a drive's rays whose profile point lies in the stope get NaN."""
+    from gbmgen.field import openings as op
+    lo, up = op.two_drives(dip_deg=65.0, spacing_m=20.0)
+    st = op.stope(lo, up, width_m=3.0)
+    empty = pd.DataFrame({"x": [], "y": [], "size_m": []})
+    rows, _ = damage_depth(empty, lo["polygon"], lo["centroid"],
+                           others=[up["polygon"], st["polygon"]])
+    nan = [r["angle_deg"] for r in rows if np.isnan(r["D_over_R"])]
+    assert nan and all(0 < a < 180 for a in nan)          # only upwards, into the stope
+    ok = [r for r in rows if not np.isnan(r["D_over_R"])]
+    assert all(r["D_over_R"] == 1.0 for r in ok) and len(ok) > 54
