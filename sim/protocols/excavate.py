@@ -117,6 +117,7 @@ class _Run:
         while done < o["max_steps"]:
             k = min(o["interval"], o["max_steps"] - done)
             t0 = time.perf_counter()
+            c0 = time.process_time()
             self.sim.cycle(k)
             done += k
             self.state["phase_steps"] = done
@@ -132,6 +133,8 @@ class _Run:
                 ok &= abs(syy / self.stress.syy - 1) <= STRESS_TOL
             self.state["phase_wall_s"] = self.state.get("phase_wall_s", 0.0) + (
                 time.perf_counter() - t0)
+            self.state["phase_cpu_s"] = self.state.get("phase_cpu_s", 0.0) + (
+                time.process_time() - c0)
             self.checkpoint()
             if ok:
                 return ratio, done, True
@@ -230,6 +233,7 @@ def run_excavate(specimen: Specimen, *, depth_m, out, k_ratio=None, gradients_mp
             sxx, syy = ins.wall_stresses(sim, walls)
             state["phases"]["insitu"] = {"steps": n, "ratio": r, "converged": okk,
                                          "wall_s": state.pop("phase_wall_s", 0.0),
+                                         "cpu_s": state.pop("phase_cpu_s", 0.0),
                                          "sigma_xx_mpa": sxx / 1e6, "sigma_yy_mpa": syy / 1e6}
             save_npz_atomic(os.path.join(out, "insitu_positions.npz"),
                             {"particle_id": sim.particle_id.copy(), "x": sim.x.copy(),
@@ -252,7 +256,8 @@ def run_excavate(specimen: Specimen, *, depth_m, out, k_ratio=None, gradients_mp
                 state.setdefault("removed", []).append(int(removed))
             r, n, okk = run.cycle_to_equilibrium(f"excavate_{k}")
             state["phases"][f"excavate_{k}"] = {"steps": n, "ratio": r, "converged": okk,
-                                                "wall_s": state.pop("phase_wall_s", 0.0)}
+                                                "wall_s": state.pop("phase_wall_s", 0.0),
+                                                "cpu_s": state.pop("phase_cpu_s", 0.0)}
             state.update(stage=k, phase_steps=0)
             run.checkpoint(force=True)
         state["phase"] = "done"
