@@ -13,6 +13,24 @@ from ._jit import njit, prange
 
 
 @njit
+def _bucket(cell, ncells):
+    """CSR of particles by cell: items[head[c]:head[c+1]] are the particles of cell c, in
+    index order."""
+    head = np.zeros(ncells + 1, np.int64)
+    for p in range(cell.size):
+        head[cell[p] + 1] += 1
+    for c in range(ncells):
+        head[c + 1] += head[c]
+    pos = head[:-1].copy()
+    items = np.empty(cell.size, np.int64)
+    for p in range(cell.size):
+        c = cell[p]
+        items[pos[c]] = p
+        pos[c] += 1
+    return head, items
+
+
+@njit
 def _grid(x, y, n, h):
     xmin = x[0]
     xmax = x[0]
@@ -33,21 +51,11 @@ def _grid(x, y, n, h):
     ncx = int((xmax - xmin) / h) + 1
     ncy = int((ymax - ymin) / h) + 1
     cell = np.empty(n, np.int64)
-    head = np.zeros(ncx * ncy + 1, np.int64)
     for p in range(n):
         cx = int((x[p] - xmin) / h)
         cy = int((y[p] - ymin) / h)
-        c = cy * ncx + cx
-        cell[p] = c
-        head[c + 1] += 1
-    for c in range(ncx * ncy):
-        head[c + 1] += head[c]
-    pos = head[:-1].copy()
-    items = np.empty(n, np.int64)
-    for p in range(n):
-        c = cell[p]
-        items[pos[c]] = p
-        pos[c] += 1
+        cell[p] = cy * ncx + cx
+    head, items = _bucket(cell, ncx * ncy)
     return cell, head, items, ncx, ncy
 
 
@@ -69,27 +77,32 @@ def _is_candidate(i, j, x, y, r, skin, sj_ptr, sj_adj):
     return True
 
 
+@njit(inline="always")
+def _owner_index(counts, cstart):
+    """cstart = exclusive prefix sum of the per-owner counts; returns the total."""
+    cstart[0] = 0
+    for i in range(counts.size):
+        cstart[i + 1] = cstart[i] + counts[i]
+    return cstart[counts.size]
+
+
+@njit(inline="always")
+def _put(k, i, j, old_start, old_cj, old_fs, ci, cj, fs):
+    """Write pair (i, j) into slot k with its shear force from the old list (0 if new)."""
+    ci[k] = i
+    cj[k] = j
+    f = 0.0
+    for o in range(old_start[i], old_start[i + 1]):
+        if old_cj[o] == j:
+            f = old_fs[o]
+            break
+    fs[k] = f
+
+
 @njit(parallel=True)
 def _build_contacts_single(x, y, r, skin, sj_ptr, sj_adj, old_start, old_cj, old_fs, cstart, ci,
                            cj, fs, nchunks):
-    """Fill the contact list; return the number of pairs (> capacity means nothing was filled).
-
-    Parameters
-    ----------
-    x, y, r : (N,) float64, m
-    skin : float, m
-    sj_ptr, sj_adj : CSR (N+1,), (2S,) of smooth-joint partners, excluded from the list.
-    old_start, old_cj, old_fs : previous owner index (N+1,), partners and shear forces.
-    cstart : (N+1,) int64, written: owner index of the new list.
-    ci, cj, fs : (C,) int32, int32, float64, written up to the returned count.
-    nchunks : int
-        Static work split (threads).
-
-    Returns
-    -------
-    total : int
-        Number of pairs; if it exceeds ``ci.size`` only ``cstart`` was written.
-    """
+    """Single-grid :func:`build_contacts` (cell 2 r_max + skin), same arguments and return."""
     n = x.size
     rmax = 0.0
     for p in range(n):
@@ -122,10 +135,7 @@ def _build_contacts_single(x, y, r, skin, sj_ptr, sj_adj, old_start, old_cj, old
                         if _is_candidate(i, j, x, y, r, skin, sj_ptr, sj_adj):
                             k += 1
             cnt[i] = k
-    cstart[0] = 0
-    for i in range(n):
-        cstart[i + 1] = cstart[i] + cnt[i]
-    total = cstart[n]
+    total = _owner_index(cnt, cstart)
     if total > ci.size:
         return total
     for t in prange(nchunks):
@@ -150,14 +160,7 @@ def _build_contacts_single(x, y, r, skin, sj_ptr, sj_adj, old_start, old_cj, old
                         if j <= i:
                             continue
                         if _is_candidate(i, j, x, y, r, skin, sj_ptr, sj_adj):
-                            ci[k] = i
-                            cj[k] = j
-                            f = 0.0
-                            for o in range(old_start[i], old_start[i + 1]):
-                                if old_cj[o] == j:
-                                    f = old_fs[o]
-                                    break
-                            fs[k] = f
+                            _put(k, i, j, old_start, old_cj, old_fs, ci, cj, fs)
                             k += 1
     return total
 
@@ -206,22 +209,12 @@ def _multigrid(x, y, r, level, nlev, skin):
         ncy[lv] = int((y1[lv] - y0[lv]) / hl) + 1
         off[lv + 1] = off[lv] + ncx[lv] * ncy[lv]
     cell = np.empty(n, np.int64)
-    head = np.zeros(off[nlev] + 1, np.int64)
     for p in range(n):
         lv = level[p]
         cx = int((x[p] - x0[lv]) / h[lv])
         cy = int((y[p] - y0[lv]) / h[lv])
-        c = off[lv] + cy * ncx[lv] + cx
-        cell[p] = c
-        head[c + 1] += 1
-    for c in range(off[nlev]):
-        head[c + 1] += head[c]
-    pos = head[:-1].copy()
-    items = np.empty(n, np.int64)
-    for p in range(n):
-        c = cell[p]
-        items[pos[c]] = p
-        pos[c] += 1
+        cell[p] = off[lv] + cy * ncx[lv] + cx
+    head, items = _bucket(cell, off[nlev])
     return head, items, x0, y0, h, rmaxl, ncx, ncy, off, cnt
 
 
@@ -247,14 +240,7 @@ def _scan_levels(i, fill, k, x, y, r, skin, sj_ptr, sj_adj, head, items, x0, y0,
                         continue
                     if _is_candidate(i, j, x, y, r, skin, sj_ptr, sj_adj):
                         if fill:
-                            ci[k] = i
-                            cj[k] = j
-                            f = 0.0
-                            for o in range(old_start[i], old_start[i + 1]):
-                                if old_cj[o] == j:
-                                    f = old_fs[o]
-                                    break
-                            fs[k] = f
+                            _put(k, i, j, old_start, old_cj, old_fs, ci, cj, fs)
                         k += 1
     return k
 
@@ -279,10 +265,7 @@ def _build_contacts_levels(x, y, r, level, nlev, skin, sj_ptr, sj_adj, old_start
             counts[i] = _scan_levels(i, False, 0, x, y, r, skin, sj_ptr, sj_adj, head, items,
                                      x0, y0, h, rmaxl, ncx, ncy, off, cnt, old_start, old_cj,
                                      old_fs, ci, cj, fs)
-    cstart[0] = 0
-    for i in range(n):
-        cstart[i + 1] = cstart[i] + counts[i]
-    total = cstart[n]
+    total = _owner_index(counts, cstart)
     if total > ci.size:
         return total
     for t in prange(nchunks):

@@ -25,7 +25,7 @@ from ..assign import make_bonds, particles_to_grains
 from ..build import _assign_minerals_by_area
 from ..errors import InputError
 from ..params import BOND, Params, load_params
-from ..tessellate import fit_power_weights, polygon_areas, polygon_centroids, tessellate
+from ..tessellate import fit_with_centroid_steps, polygon_areas, tessellate
 from .plan import RingPlan, load_plan
 
 __all__ = ["build_field", "ring_areas", "local_bond_pairs", "remove_overlaps",
@@ -159,13 +159,8 @@ def _grains(plan, box, foci, areas, rng, fit=True):
     w = sr ** 2
     fitinfo = {}
     if fit:
-        w, fitinfo = fit_power_weights(sx, sy, box, tg, weights=w)
-        for _ in range(config.CENTROID_STEPS):
-            xy, off, sidx = tessellate(sx, sy, box, weights=w)
-            c = polygon_centroids(xy, off)
-            sx, sy = sx.copy(), sy.copy()
-            sx[sidx], sy[sidx] = c[:, 0], c[:, 1]
-            w, fitinfo = fit_power_weights(sx, sy, box, tg, weights=w)
+        sx, sy, w, fitinfo = fit_with_centroid_steps(sx, sy, box, tg, weights=w,
+                                                     steps=config.CENTROID_STEPS)
     xy, off, sidx = tessellate(sx, sy, box, weights=w)
     return xy, off, ring[sidx], {"n_seeds": int(sx.size), "seed_relaxation": info,
                                  "weight_fit": fitinfo}

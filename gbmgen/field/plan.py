@@ -19,13 +19,13 @@ from __future__ import annotations
 import csv
 import os
 from dataclasses import dataclass, field
-from importlib import resources
 
 import numpy as np
 
 from sim.field_geometry import ring_index
 
 from ..errors import InputError
+from ..params import read_preset_or_file
 
 __all__ = ["RingPlan", "load_plan", "plan_from_dict", "PLAN_PRESETS"]
 
@@ -180,24 +180,12 @@ def load_plan(name_or_path="thesis-ch7") -> RingPlan:
     InputError
         Unknown preset, unreadable file, or an invalid field (named).
     """
-    import yaml
-
-    if name_or_path in PLAN_PRESETS:
-        text = resources.files("gbmgen").joinpath("presets", f"{name_or_path}.yaml").read_text()
-        source = f"preset {name_or_path}"
-    else:
+    if name_or_path not in PLAN_PRESETS and os.fspath(name_or_path).lower().endswith(".csv"):
         path = os.fspath(name_or_path)
         if not os.path.exists(path):
             raise InputError(f"{path}: no such ring plan (presets: {', '.join(PLAN_PRESETS)})")
-        if path.lower().endswith(".csv"):
-            return plan_from_dict(_read_csv(path), path)
-        with open(path, encoding="utf-8") as fh:
-            text = fh.read()
-        source = path
-    try:
-        data = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        raise InputError(f"{source}: not valid YAML/JSON ({exc})") from None
+        return plan_from_dict(_read_csv(path), path)
+    data, source = read_preset_or_file(name_or_path, PLAN_PRESETS, "ring plan")
     if isinstance(data, dict) and "field" in data:
         data = data["field"]
     return plan_from_dict(data, source)
