@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .field_geometry import distance_to_polygon, ray_exit_distance
+from .field_geometry import distance_to_polygon, points_in_polygon, ray_exit_distance
 from .measure import pair_forces
 from .state import X, Y
 
@@ -91,14 +91,17 @@ def kirsch_circle_mean(centre_xy, rho, a, sxx, syy, n=24):
     return np.array([[sx.mean(), sxy.mean()], [sxy.mean(), sy.mean()]])
 
 
-def stress_profile(sim, centre, a, sxx, syy, *, r_over_a=(1.1, 1.25, 1.5, 2.0, 3.0),
-                   theta_deg=(0, 45, 90, 135, 180, 225, 270, 315), circle_frac=0.4):
+def stress_profile(sim, centre, a, sxx, syy, *, profile=None,
+                   r_over_a=(1.1, 1.25, 1.5, 2.0, 3.0),
+                   theta_deg=(0, 45, 90, 135, 180, 225, 270, 315), circle_frac=0.9):
     """Stresses in measurement circles along rays, beside Kirsch for radius ``a``.
 
-    Circles of radius ``circle_frac`` × a, at most 0.9 (r − a) so that none reaches into the
-    opening, centred at r/a along each θ. The Kirsch columns are the analytic field averaged
-    over the same circle (the point values are ``kirsch_*_point_mpa``): at r = 1.5 a a circle of
-    0.45 a averages a field that varies by 40 % across it.
+    Each circle is the largest that stays off the opening, up to ``circle_frac`` × a: radius
+    min(circle_frac a, 0.9 d) with d the distance from its centre to the opening's ``profile``
+    (default the circle of radius a: d = r − a); a centre inside the opening gives NaN. The
+    Kirsch columns are the analytic field averaged over the same circle (the point values are
+    ``kirsch_*_point_mpa``): at r = 1.5 a a circle of 0.45 a averages a field that varies by
+    40 % across it.
 
     Returns
     -------
@@ -111,10 +114,18 @@ def stress_profile(sim, centre, a, sxx, syy, *, r_over_a=(1.1, 1.25, 1.5, 2.0, 3
     x, y = st.pf[X], st.pf[Y]
     rows = []
     for ra in r_over_a:
-        rho = min(circle_frac * a, 0.9 * (ra - 1.0) * a)
         for th in theta_deg:
             c, sn = np.cos(np.radians(th)), np.sin(np.radians(th))
-            sig, n = circle_stress(x, y, s, (centre[0] + ra * a * c, centre[1] + ra * a * sn), rho)
+            p = (centre[0] + ra * a * c, centre[1] + ra * a * sn)
+            if profile is None:
+                d, inside = (ra - 1.0) * a, ra <= 1.0
+            else:
+                d = float(distance_to_polygon([p[0]], [p[1]], profile)[0])
+                inside = bool(points_in_polygon([p[0]], [p[1]], profile)[0])
+            rho = min(circle_frac * a, 0.9 * d)
+            sig, n = circle_stress(x, y, s, p, rho)
+            if inside or n == 0:
+                sig = np.full((2, 2), np.nan)
             nr, nt = np.array([c, sn]), np.array([-sn, c])
             krr, ktt, _ = kirsch(ra, th, sxx, syy)
             km = kirsch_circle_mean((ra * a * c, ra * a * sn), rho, a, sxx, syy)
@@ -175,8 +186,6 @@ def damage_depth(cracks, profile, centroid, *, others=(), bin_deg=BIN_DEG):
     connected : (C,) bool
         Breaks connected to this opening.
     """
-    from .field_geometry import points_in_polygon
-
     profile = np.asarray(profile, float)
     cx = cracks["x"].to_numpy(float) if len(cracks) else np.zeros(0)
     cy = cracks["y"].to_numpy(float) if len(cracks) else np.zeros(0)

@@ -76,7 +76,7 @@ def write_field_results(out, sim, specimen, stress, state, *, figures=True) -> d
     sp_rows = []
     for o in openings:
         a, c = _reference_radius(o)
-        for r in stress_profile(sim, c, a, stress.sxx, stress.syy):
+        for r in stress_profile(sim, c, a, stress.sxx, stress.syy, profile=o["polygon"]):
             sp_rows.append({"opening": o["name"], "a_m": a, **r})
     sp = pd.DataFrame(sp_rows)
     write_csv_atomic(os.path.join(out, "stress_profile.csv"), sp)
