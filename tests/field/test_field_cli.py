@@ -85,3 +85,20 @@ def test_killed_excavation_resumes_bit_identically(tiny_drive, tmp_path, monkeyp
     ha = pd.read_csv(tmp_path / "a" / "history.csv")
     hb = pd.read_csv(tmp_path / "b" / "history.csv")
     assert np.array_equal(ha["ratio"].to_numpy(), hb["ratio"].to_numpy())
+
+
+def test_gbmsim_excavate_numerical_failure_exits_3(tiny_drive, tmp_path, capsys, monkeypatch):
+    from sim.errors import InstabilityError
+    from sim.protocols import excavate
+
+    def unstable(*a, **k):
+        raise InstabilityError("step 17: particle 3 moved more than 0.25 R\nhint: smaller dt",
+                               step=17, cause="energy")
+
+    monkeypatch.setattr(excavate, "run_excavate", unstable)
+    spec = tmp_path / "f.npz"
+    tiny_drive.save(spec)
+    rc = gbmsim_main(["excavate", str(spec), "--depth-m", "400", "--out", str(tmp_path / "d")])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert rc == 3 and len(err) == 1
+    assert "numerical failure" in err[0] and "step 17" in err[0] and "--resume" in err[0]
