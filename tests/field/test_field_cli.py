@@ -102,3 +102,16 @@ def test_gbmsim_excavate_numerical_failure_exits_3(tiny_drive, tmp_path, capsys,
     err = capsys.readouterr().err.strip().splitlines()
     assert rc == 3 and len(err) == 1
     assert "numerical failure" in err[0] and "step 17" in err[0] and "--resume" in err[0]
+
+
+def test_staged_excavation_enlarges_the_profile(tiny_drive, tmp_path):
+    """--stages 2: half-size profile first, then the design profile; together = all of it."""
+    from sim.field_geometry import points_in_polygon
+    s = run_excavate(tiny_drive, depth_m=400, out=tmp_path / "s", stages=2, max_steps=500,
+                     interval=500, ratio=1e-12, progress=False, figures=False)
+    first, second = s["particles_removed"]
+    inside = points_in_polygon(tiny_drive.x, tiny_drive.y,
+                               tiny_drive.meta["field"]["openings"][0]["polygon"]).sum()
+    assert first + second == inside
+    assert 0.15 * inside < first < 0.35 * inside         # ~ (1/2)^2 of the area
+    assert set(s["phases"]) == {"insitu", "excavate_1", "excavate_2"}
