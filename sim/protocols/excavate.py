@@ -253,7 +253,9 @@ def run_excavate(specimen: Specimen, *, depth_m, out, k_ratio=None, gradients_mp
                     gone |= points_in_polygon(sim.x, sim.y, _scaled(o["polygon"], frac))
                 _wake_around(sim, gone)
                 removed = sim.remove_particles(gone)
-                state.setdefault("removed", []).append(int(removed))
+                # added, not appended: a stage resumed from a checkpoint taken right after its
+                # removal repeats it and removes nothing more
+                state.setdefault("removed", [0] * stages)[k - 1] += int(removed)
             r, n, okk = run.cycle_to_equilibrium(f"excavate_{k}")
             state["phases"][f"excavate_{k}"] = {"steps": n, "ratio": r, "converged": okk,
                                                 "wall_s": state.pop("phase_wall_s", 0.0),
