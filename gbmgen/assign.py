@@ -75,7 +75,7 @@ def find_contacts(x, y, r, gap):
     return i[o].astype(np.int32), j[o].astype(np.int32)
 
 
-def make_bonds(x, y, r, grain, xy, offsets, *, gap):
+def make_bonds(x, y, r, grain, xy, offsets, *, gap=None, pairs=None):
     """Bonds of a packing: parallel bonds inside grains, smooth joints across boundaries.
 
     Parameters
@@ -87,6 +87,9 @@ def make_bonds(x, y, r, grain, xy, offsets, *, gap):
         Grain polygons.
     gap : float, m
         Bond gap (contacts with d - r_i - r_j <= gap are bonded).
+    pairs : (i, j), optional
+        The bonded pairs (i < j, sorted) when they are chosen otherwise (field models bond
+        by a gap relative to the pair's radii); ``gap`` is then not used.
 
     Returns
     -------
@@ -94,7 +97,7 @@ def make_bonds(x, y, r, grain, xy, offsets, *, gap):
         ``bond_i, bond_j`` (int32, i < j), ``bond_kind`` (int8: 0 parallel bond, 1 smooth
         joint), ``joint_nx, joint_ny`` (float64, NaN for kind 0).
     """
-    i, j = find_contacts(x, y, r, gap)
+    i, j = find_contacts(x, y, r, gap) if pairs is None else pairs
     gi, gj = grain[i], grain[j]
     kind = ((gi != gj) & (gi >= 0) & (gj >= 0)).astype(np.int8)
     nx = np.full(i.size, np.nan)

@@ -21,7 +21,7 @@ from .fidelity import fidelity_report
 from .packing import pack_particles, pack_seeds
 from .params import Params, load_params
 from .table import GrainSizeTable
-from .tessellate import Grains, fit_power_weights, polygon_areas, polygon_centroids, tessellate
+from .tessellate import Grains, fit_with_centroid_steps, polygon_areas, tessellate
 
 __all__ = ["build_grains", "build_specimen", "BuildResult", "TESSELLATIONS"]
 
@@ -149,14 +149,8 @@ def build_grains(table: GrainSizeTable | None = None, *, width_mm, height_mm, sc
         w = seeds.r ** 2
         sx, sy = seeds.x, seeds.y
         if fit_areas:
-            target = np.pi * seeds.d ** 2 / 4.0
-            w, fit = fit_power_weights(sx, sy, box, target, weights=w)
-            for _ in range(config.CENTROID_STEPS):
-                xy, off, sidx = tessellate(sx, sy, box, weights=w)
-                c = polygon_centroids(xy, off)
-                sx, sy = sx.copy(), sy.copy()
-                sx[sidx], sy[sidx] = c[:, 0], c[:, 1]
-                w, fit = fit_power_weights(sx, sy, box, target, weights=w)
+            sx, sy, w, fit = fit_with_centroid_steps(sx, sy, box, np.pi * seeds.d ** 2 / 4.0,
+                                                     weights=w, steps=config.CENTROID_STEPS)
         xy, off, sidx = tessellate(sx, sy, box, weights=w)
         own = particles_to_grains(sx[sidx], sy[sidx], xy, off, box)
         fit = dict(fit, centroid_steps=config.CENTROID_STEPS if fit_areas else 0,

@@ -136,6 +136,9 @@ def _parser():
     d.add_argument("--at-mm", type=float, nargs=2, metavar=("X", "Y"),
                    help="centre of a double hole / flaw / manual hole [specimen centre]")
 
+    from .field.cli import register as register_field
+    register_field(sub)
+
     e = sub.add_parser("export", help="PFC .geom and/or VTK of a specimen")
     e.add_argument("specimen")
     e.add_argument("--geom")
@@ -328,6 +331,9 @@ def main(argv=None) -> int:
             return _build(a)
         if a.command == "run":
             return _run(a)
+        if a.command == "field":
+            from .field.cli import run_field_command
+            return run_field_command(a)
         spec = _load(a.specimen)
         if a.command == "info":
             if a.json:

@@ -63,7 +63,7 @@ def bond_like_joint_stiffness(pb_emod, r_mean):
     return kn, kn / 2.0
 
 #: Named presets shipped as package data.
-PRESETS = ("thesis-ch4", "thesis-ch5", "thesis-ch4-calibrated")
+PRESETS = ("thesis-ch4", "thesis-ch5", "thesis-ch4-calibrated", "thesis-ch7")
 
 
 @dataclass(frozen=True)
@@ -158,23 +158,23 @@ def params_from_dict(data: dict, source: str = "params") -> Params:
     return Params(name=str(data.get("name", source)), minerals=out, joint=jrow, source=source)
 
 
-def load_params(name_or_path="thesis-ch4") -> Params:
-    """A named preset (``thesis-ch4``, ``thesis-ch5``) or a YAML/JSON file.
+def read_preset_or_file(name_or_path, presets, what="parameter file"):
+    """(data, source): a preset of ``gbmgen/presets`` by name, or a YAML/JSON file, parsed.
 
     Raises
     ------
     InputError
-        Unknown preset, unreadable file, or a missing/invalid field (named).
+        Missing file (``what`` names it) or text that is not YAML/JSON.
     """
     import yaml
 
-    if name_or_path in PRESETS:
+    if name_or_path in presets:
         text = resources.files("gbmgen").joinpath("presets", f"{name_or_path}.yaml").read_text()
         source = f"preset {name_or_path}"
     else:
         path = os.fspath(name_or_path)
         if not os.path.exists(path):
-            raise InputError(f"{path}: no such parameter file (presets: {', '.join(PRESETS)})")
+            raise InputError(f"{path}: no such {what} (presets: {', '.join(presets)})")
         with open(path, encoding="utf-8") as fh:
             text = fh.read()
         source = path
@@ -185,4 +185,16 @@ def load_params(name_or_path="thesis-ch4") -> Params:
             data = yaml.safe_load(text)
     except (yaml.YAMLError, json.JSONDecodeError) as exc:
         raise InputError(f"{source}: not valid YAML/JSON ({exc})") from None
+    return data, source
+
+
+def load_params(name_or_path="thesis-ch4") -> Params:
+    """A named preset (``thesis-ch4``, ``thesis-ch5``) or a YAML/JSON file.
+
+    Raises
+    ------
+    InputError
+        Unknown preset, unreadable file, or a missing/invalid field (named).
+    """
+    data, source = read_preset_or_file(name_or_path, PRESETS)
     return params_from_dict(data, source)

@@ -316,3 +316,25 @@ def fit_power_weights(sx, sy, box, target_area, *, weights, n_iter=30, rtol=0.01
         err = float(np.max(np.abs(a - t) / t))
     rms = float(np.sqrt(np.mean((np.sqrt(a / t) - 1.0) ** 2)))
     return w, {"iterations": it, "max_rel_error": err, "rms_rel_error": rms}
+
+
+def fit_with_centroid_steps(sx, sy, box, target_area, *, weights, steps):
+    """:func:`fit_power_weights`, then ``steps`` times: seeds to their cell centroids and fit
+    again (the seeds then lie in their own cells; areas stay within the fit's tolerance).
+
+    Returns
+    -------
+    sx, sy : (S,) ndarray of float64, m
+        Seeds (moved; copies).
+    weights : (S,) ndarray of float64, m^2
+    info : dict
+        Of the last fit.
+    """
+    w, fit = fit_power_weights(sx, sy, box, target_area, weights=weights)
+    for _ in range(steps):
+        xy, off, sidx = tessellate(sx, sy, box, weights=w)
+        c = polygon_centroids(xy, off)
+        sx, sy = sx.copy(), sy.copy()
+        sx[sidx], sy[sidx] = c[:, 0], c[:, 1]
+        w, fit = fit_power_weights(sx, sy, box, target_area, weights=w)
+    return sx, sy, w, fit

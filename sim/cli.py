@@ -106,6 +106,8 @@ def build_parser() -> argparse.ArgumentParser:
     q.set_defaults(func=_verify)
     from .protocols.cli import register
     register(sub)
+    from .protocols.excavate_cli import register as register_excavate
+    register_excavate(sub)
     return p
 
 

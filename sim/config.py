@@ -100,3 +100,8 @@ TOL_LATTICE_MODULUS = 0.02
 TOL_BOND_STRENGTH = 1e-3
 TOL_DAMPING_DECAY = 0.01
 TOL_ENERGY_DRIFT = 1e-4
+
+#: Broad phase: above this radius spread (r_max / r_min) the contact search uses one cell grid
+#: per radius level (factor 2 apart) instead of one grid sized for the largest particle, whose
+#: cells would hold hundreds of the smallest (sim.neighbors.build_contacts; field models).
+MULTILEVEL_SPREAD = 4.0
