@@ -50,7 +50,7 @@ def _warm(_):
     import cv2
     cv2.setNumThreads(1)
 
-    from semkit.pipeline import analyse_image
+    from semkit.analysis import analyse_image
     img = np.full((96, 128), 180, np.uint8)
     img[40:44, 10:110] = 30
     analyse_image(img).summary()
@@ -59,8 +59,8 @@ def _warm(_):
 
 def _run_one(args):
     path, method = args
+    from semkit.analysis import analyse_image
     from semkit.io import read_image
-    from semkit.pipeline import analyse_image
     img = read_image(path)
     t0, c0 = time.perf_counter(), time.process_time()
     a = analyse_image(img, threshold=method)
@@ -109,7 +109,7 @@ def main(argv=None) -> int:
                 area_err_signed_median=float(ea.median()),
                 length_err_signed_median=float(el.median()))
     # end to end through analyse_folder (PNG decode, CSV writing, process pool)
-    from semkit.pipeline import analyse_folder
+    from semkit.workflow import analyse_folder
     for method in ("auto", "otsu"):
         t1 = time.perf_counter()
         analyse_folder(tmp, tmp / f"out_{method}", jobs=args.jobs, progress=False,

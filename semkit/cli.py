@@ -1,4 +1,4 @@
-"""``semkit`` command line: a thin argparse layer over :mod:`semkit.pipeline` (no maths here).
+"""``semkit`` command line: a thin argparse layer over :mod:`semkit.workflow` (no maths here).
 
 Exit status: 0 all images analysed; 1 the batch finished but some images failed (a one-line
 summary on stderr, details in ``images.csv``); 2 bad input (bad flag value, missing folder,
@@ -16,9 +16,8 @@ __all__ = ["main", "build_parser"]
 #: keys a --config YAML file may set (the API keywords of analyse_folder)
 _ANALYSE_KEYS = ("threshold", "flatten", "denoise_sigma_px", "despeckle", "min_area_um2",
                  "max_hole_px", "length", "exclude_pores", "pixel_size_um", "jobs", "progress",
-                 "overlays",
-                 # --- issue #3 ---
-                 "classify", "crack_model", "grains", "minerals", "classes", "labels")
+                 "overlays", "classify", "crack_model", "grains", "minerals", "classes",
+                 "labels")
 
 
 def _version():
@@ -62,7 +61,7 @@ def _add_analyse(sub):
     p.add_argument("--no-progress", dest="progress", action="store_false", default=None,
                    help="no progress bar")
     p.add_argument("--config", metavar="FILE.yaml", help="options from YAML (flags win)")
-    # --- issue #3: crack types, P, grains (docs/semkit_science.md) ---
+    # crack types, P, grains (docs/semkit_science.md)
     p.add_argument("--no-classify", dest="classify", action="store_false", default=None,
                    help="skip tensile/shear/mixed typing (then no P)")
     p.add_argument("--crack-model", default=None, metavar="MODEL.json",
@@ -77,7 +76,6 @@ def _add_analyse(sub):
     p.add_argument("--classes", default=None, metavar="E1,E2",
                    help="grain-size class edges fine/medium,medium/coarse in µm (default: "
                         "10th/90th count percentiles per mineral)")
-    # --- end issue #3 ---
     p.set_defaults(run=_run_analyse)
 
 
@@ -95,7 +93,7 @@ def build_parser():
     sub = ap.add_subparsers(dest="command", metavar="COMMAND")
     _add_analyse(sub)
     _add_synth(sub)
-    _add_science(sub)  # issue #3: grains, indices, classify
+    _add_science(sub)  # grains, indices, classify
     return ap
 
 
@@ -117,7 +115,7 @@ def _load_config(path):
 
 
 def _run_analyse(args):
-    from .pipeline import analyse_folder
+    from .workflow import analyse_folder
     kw = _load_config(args.config) if args.config else {}
     for k in _ANALYSE_KEYS:
         v = getattr(args, k, None)
@@ -127,14 +125,12 @@ def _run_analyse(args):
         kw["max_hole_px"] = None
     if kw.get("jobs") is not None and kw["jobs"] < 1:
         raise InputError(f"--jobs: expected >= 1, got {kw['jobs']}")
-    # --- issue #3 ---
     if kw.get("labels") is not None:
         from .classify import read_labels
         kw["labels"] = read_labels(kw["labels"])
     if kw.get("classes") is not None:
-        from .grains import _parse_classes
-        _parse_classes(kw["classes"])
-    # --- end issue #3 ---
+        from .grains import parse_classes
+        parse_classes(kw["classes"])
     images, _ = analyse_folder(args.folder, args.out, **kw)
     failed = images["error"].fillna("").astype(str).str.len() > 0
     n_fail = int(failed.sum())
@@ -146,7 +142,7 @@ def _run_analyse(args):
     return 0
 
 
-# --- issue #3: semkit grains | indices | classify ------------------------------------------
+# ----------------------------------------------------------- semkit grains | indices | classify
 def _add_science(sub):
     p = sub.add_parser("grains", help="grain map and grain-size table (grains.csv) of a folder")
     p.add_argument("folder", metavar="DIR", help="folder of images (manifest.csv optional)")
@@ -177,7 +173,7 @@ def _add_science(sub):
 
 
 def _run_grains(args):
-    from .grains import analyse_grains_folder
+    from .workflow import analyse_grains_folder
     t = analyse_grains_folder(args.folder, args.out, minerals=args.minerals,
                               classes=args.classes, pixel_size_um=args.pixel_size_um,
                               progress=args.progress, seed=args.seed)
@@ -210,13 +206,13 @@ def _run_indices(args):
 
 
 def _run_classify(args):
-    from .classify import read_labels, save_model, train_from_folder
+    from .classify import read_labels, save_model
+    from .workflow import train_from_folder
     model = train_from_folder(args.folder, read_labels(args.train),
                               pixel_size_um=args.pixel_size_um, seed=args.seed)
     save_model(model, args.out)
     print(f"wrote crack model to {args.out} ({len(model['trace_coef'])} trace-model terms)")
     return 0
-# --- end issue #3 ------------------------------------------------------------------------
 
 
 def _run_synth(args):

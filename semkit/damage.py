@@ -291,11 +291,3 @@ def plot_p_by_stage(damage, path=None, *, ax=None):
         fig.savefig(tmp, dpi=120)
         os.replace(tmp, path)
     return fig
-
-
-def __getattr__(name):
-    """The pipeline's entry points live in ``semkit.damage_stage`` (imported on first use)."""
-    if name in ("science_stage", "write_science_outputs"):
-        from . import damage_stage
-        return getattr(damage_stage, name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -111,7 +111,7 @@ def test_classify_post_hand_drawn_tensile_and_shear():
     # objects as the crack pipeline defines them (the model is trained on those): the
     # en-echelon pieces and their debris are one object. (From a bare threshold, 1-px pieces
     # 3 px apart stay separate 24-px objects: too short to type reliably on their own.)
-    from semkit.pipeline import analyse_image
+    from semkit.analysis import analyse_image
     a = analyse_image(np.clip(img, 0, 255).astype(np.uint8), pixel_size_um=1.0)
     lab = a.crack_labels
     t, types = classify_post(lab, image=a.smooth)
@@ -135,7 +135,7 @@ def test_crack_clusters_attach_debris_to_nearest_large_crack():
 def _post_sample(seed):
     """A post-test synthetic image analysed by the crack pipeline: (synth, analysis, truth)."""
     synth = pytest.importorskip("semkit.synth")
-    from semkit.pipeline import analyse_image
+    from semkit.analysis import analyse_image
     s = synth.make_sem_image((384, 512), stage="post", n_cracks=12, seed=seed)
     a = analyse_image(s.image, pixel_size_um=s.pixel_size_um)
     code = np.zeros(len(s.cracks) + 1, int)

@@ -5,9 +5,9 @@ import numpy as np
 import pytest
 from scipy import ndimage as ndi
 
-from semkit.classify_features import FEATURE_NAMES, post_features
-from semkit.classify_model import load_model
-from semkit.classify_traces import trace_features, traces
+from semkit.classify.features import FEATURE_NAMES, post_features
+from semkit.classify.model import load_model
+from semkit.classify.traces import trace_features, traces
 from semkit.errors import InputError
 
 

@@ -1,11 +1,11 @@
-"""semkit.pipeline and semkit.cli: batch runs, failures recorded, exit codes, laziness."""
+"""semkit.workflow and semkit.cli: batch runs, failures recorded, exit codes, laziness."""
 import numpy as np
 import pandas as pd
 import pytest
 
-from semkit import cli, pipeline
+from semkit import analysis, cli, workflow
+from semkit.analysis import analyse_image
 from semkit.io import write_image
-from semkit.pipeline import analyse_image
 from semkit.synth import make_sem_image
 
 GOOD = ("a.png", "b.png", "c.png")
@@ -42,7 +42,7 @@ def test_batch_goes_on_and_records_errors(bad_folder, tmp_path, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "4 of 7 images failed" in err[0]
     img = pd.read_csv(out / "images.csv", keep_default_na=False)
-    assert list(img.columns[:12]) == pipeline.IMAGE_COLUMNS
+    assert list(img.columns[:12]) == analysis.IMAGE_COLUMNS
     errors = dict(zip(img["image"], img["error"]))
     assert "cannot read" in errors["corrupt.png"] and "cannot read" in errors["empty.tif"]
     assert "no contrast" in errors["dark.png"]
@@ -64,8 +64,8 @@ def test_batch_goes_on_and_records_errors(bad_folder, tmp_path, capsys):
 
 def test_parallel_equals_serial(folder, tmp_path):
     kw = dict(progress=False, overlays=False, classify=False)
-    i1, c1 = pipeline.analyse_folder(folder, tmp_path / "s", jobs=1, **kw)
-    i2, c2 = pipeline.analyse_folder(folder, tmp_path / "p", jobs=2, **kw)
+    i1, c1 = workflow.analyse_folder(folder, tmp_path / "s", jobs=1, **kw)
+    i2, c2 = workflow.analyse_folder(folder, tmp_path / "p", jobs=2, **kw)
     cols = ["image", "n_cracks", "crack_area_um2", "crack_length_um", "crack_area_fraction"]
     pd.testing.assert_frame_equal(i1[cols], i2[cols])
     pd.testing.assert_frame_equal(c1.drop(columns=[]), c2)
@@ -98,7 +98,7 @@ def test_config_file_and_flags(folder, tmp_path):
 
 
 def test_interrupt_keeps_finished_results(folder, tmp_path, monkeypatch):
-    real = pipeline.analyse_file
+    real = workflow.analyse_file
     calls = []
 
     def flaky(path, **kw):
@@ -107,7 +107,7 @@ def test_interrupt_keeps_finished_results(folder, tmp_path, monkeypatch):
             raise KeyboardInterrupt
         return real(path, **kw)
 
-    monkeypatch.setattr(pipeline, "analyse_file", flaky)
+    monkeypatch.setattr(workflow, "analyse_file", flaky)
     out = tmp_path / "o"
     rc = cli.main(["analyse", str(folder), "--out", str(out), "--no-progress", "--jobs", "1",
                    "--no-classify"])

@@ -6,15 +6,15 @@ each other across a junction, or across a short gap between objects, within
 trace. Every crack pixel belongs to the trace of its nearest skeleton pixel in its cluster
 (small debris objects join the nearest large crack). :func:`trace_features` summarises the
 per-pixel tensile probability and aperture along each trace (:data:`TRACE_FEATURE_NAMES`);
-``semkit.classify_model`` types each trace from them.
+``semkit.classify.model`` types each trace from them.
 """
 from __future__ import annotations
 
 import numpy as np
 from scipy import ndimage as ndi
 
-from . import config
-from .classify_features import LINK_PX, nearest_in_cluster
+from .. import config
+from .features import LINK_PX, nearest_in_cluster
 
 __all__ = ["traces", "trace_features", "TRACE_FEATURE_NAMES"]
 
@@ -166,7 +166,7 @@ def trace_features(crack_labels, rr, cc, p, *, skeleton=None, link_px=LINK_PX):
     ----------
     crack_labels : (M, N) ndarray of int
     rr, cc : (K,) ndarray of int
-        Skeleton pixels (as returned by :func:`semkit.classify_features.post_features`).
+        Skeleton pixels (as returned by :func:`semkit.classify.features.post_features`).
     p : (K,) ndarray of float
         P(tensile) of each skeleton pixel.
     skeleton : (M, N) ndarray of bool, optional

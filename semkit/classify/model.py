@@ -3,10 +3,10 @@
 Two stages, both small and JSON-able (no pickles):
 
 1. a logistic model of P(tensile) at each skeleton pixel from its morphology
-   (:data:`semkit.classify_features.FEATURE_NAMES`), fitted by IRLS on the tensile and shear
+   (:data:`semkit.classify.features.FEATURE_NAMES`), fitted by IRLS on the tensile and shear
    pixels of labelled cracks;
 2. a multinomial logistic (softmax) model that types each trace as tensile, shear or mixed
-   from the along-trace summary of stage 1 (:data:`semkit.classify_traces.TRACE_FEATURE_NAMES`)
+   from the along-trace summary of stage 1 (:data:`semkit.classify.traces.TRACE_FEATURE_NAMES`)
    and the pairwise products of a few of them (``trace_products``: a mixed crack has both a
    tensile-looking and a shear-looking stretch, an interaction a linear model cannot express).
    It is fitted by L2-regularised gradient descent, each trace weighted by the square root of
@@ -22,9 +22,9 @@ import os
 
 import numpy as np
 
-from .classify_features import FEATURE_NAMES, LINK_PX, WINDOW_PX, post_features, skeleton_of
-from .classify_traces import TRACE_FEATURE_NAMES, trace_features
-from .errors import InputError
+from ..errors import InputError
+from .features import FEATURE_NAMES, LINK_PX, WINDOW_PX, post_features, skeleton_of
+from .traces import TRACE_FEATURE_NAMES, trace_features
 
 __all__ = ["DEFAULT_POST_MODEL", "train_post", "save_model", "load_model", "p_tensile",
            "trace_probabilities", "TYPE_CODES"]
@@ -44,7 +44,7 @@ MAX_PIXELS = 200_000
 #: default post-test model, fitted with :func:`train_post` on 72 synthetic post-test images
 #: (``semkit.synth.make_sem_image((384, 512), stage="post", n_cracks=12, seed=s)`` for
 #: s = 100..111 and 1000..1059; objects and smoothed grey image from
-#: ``semkit.pipeline.analyse_image``; labels = the true type of each crack pixel).
+#: ``semkit.analysis.analyse_image``; labels = the true type of each crack pixel).
 #: docs/semkit_science.md says how it scores on the held-out seeds 200..211.
 DEFAULT_POST_MODEL = None  # filled below from _DEFAULT_JSON
 
@@ -250,6 +250,6 @@ def load_model(path):
     return check_model(model, where=str(path))
 
 
-_DEFAULT_JSON = os.path.join(os.path.dirname(__file__), "classify_model.json")
+_DEFAULT_JSON = os.path.join(os.path.dirname(__file__), "model.json")
 DEFAULT_POST_MODEL = (load_model(_DEFAULT_JSON) if os.path.exists(_DEFAULT_JSON)
                       else None)

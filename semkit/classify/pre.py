@@ -10,9 +10,9 @@ import numpy as np
 import pandas as pd
 from scipy import ndimage as ndi
 
-from . import config
-from .classify_features import skeleton_of
-from .errors import InputError
+from .. import config
+from ..errors import InputError
+from .features import skeleton_of
 
 __all__ = ["classify_pre", "INTER_MIN_FRACTION", "INTRA_MIN_FRACTION", "BOUNDARY_TOL_PX"]
 

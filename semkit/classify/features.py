@@ -3,15 +3,15 @@
 At every skeleton pixel of the crack objects, :func:`post_features` measures the local
 opening and its regularity, the darkness of the mask, parallel layers across the trace and
 debris alongside it (:data:`FEATURE_NAMES`). :func:`crack_clusters` attaches small objects
-(debris, en-echelon fragments) to the nearest large crack. ``semkit.classify_traces`` groups the
-skeleton pixels into traces and ``semkit.classify_model`` turns the features into types.
+(debris, en-echelon fragments) to the nearest large crack. ``semkit.classify.traces`` groups the
+skeleton pixels into traces and ``semkit.classify.model`` turns the features into types.
 """
 from __future__ import annotations
 
 import numpy as np
 from scipy import ndimage as ndi
 
-from . import config
+from .. import config
 
 __all__ = ["post_features", "crack_clusters", "nearest_in_cluster", "skeleton_of",
            "FEATURE_NAMES", "WINDOW_PX", "LINK_PX", "SMALL_OBJECT_PX"]
@@ -239,7 +239,7 @@ def post_features(crack_labels, *, image=None, skeleton=None, window_px=WINDOW_P
     scatter = np.sqrt(np.maximum(lam, 0.0))
     grey = np.full((len(rr), 6), np.nan)
     if image is not None and len(rr):
-        from .damage import darkness_fraction
+        from ..damage_areas import darkness_fraction
         f, _ = darkness_fraction(image, lab)
         # dark (partial-volume) width per skeleton px over the mask aperture: ~1 for an
         # open crack, well below 1 where the mask bridges or fills between thin traces
