@@ -94,6 +94,7 @@ def build_parser():
     _add_analyse(sub)
     _add_synth(sub)
     _add_science(sub)  # grains, indices, classify
+    _add_train_segmenter(sub)
     return ap
 
 
@@ -212,6 +213,50 @@ def _run_classify(args):
                               pixel_size_um=args.pixel_size_um, seed=args.seed)
     save_model(model, args.out)
     print(f"wrote crack model to {args.out} ({len(model['trace_coef'])} trace-model terms)")
+    return 0
+
+
+def _add_train_segmenter(sub):
+    p = sub.add_parser("train-segmenter", help="train a crack pixel classifier from labels",
+                       description="Train a random-forest crack / not-crack pixel classifier "
+                                   "(for semkit analyse --segmenter) from label images: 0 "
+                                   "unlabelled, 1 crack, 2 not crack (scribbles or full "
+                                   "masks).")
+    p.add_argument("images", nargs="+", metavar="IMAGES",
+                   help="image files and/or folders (images without a label file are skipped)")
+    p.add_argument("--labels", required=True, metavar="LABELS",
+                   help="folder of label PNGs named <image stem>.png or <stem>_labels.png")
+    p.add_argument("--out", required=True, metavar="SEG.skops", help="model file to write")
+    p.add_argument("--binary-masks", action="store_true",
+                   help="labels are painted crack masks (0 background, nonzero crack)")
+    p.add_argument("--trees", type=int, default=None, metavar="N", help="trees (default 50)")
+    p.add_argument("--sigma-max-px", type=float, default=None, metavar="PX",
+                   help="largest feature scale, px (default 8)")
+    p.add_argument("--jobs", type=int, default=None, metavar="N", help="threads (default all)")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--no-progress", dest="progress", action="store_false", default=True)
+    p.set_defaults(run=_run_train_segmenter)
+
+
+def _run_train_segmenter(args):
+    from .segmenter import train_segmenter
+    from .segmenter_file import read_training_set, save_segmenter
+    if not str(args.out).endswith(".skops"):
+        raise InputError(f"--out: expected a .skops file name, got {args.out}")
+    images, labels, names, skipped = read_training_set(args.images, args.labels,
+                                                       binary_masks=args.binary_masks)
+    if skipped:
+        print(f"skipped {len(skipped)} image(s) without a label file: {', '.join(skipped)}",
+              file=sys.stderr)
+    kw = {k: v for k, v in (("n_trees", args.trees), ("sigma_max", args.sigma_max_px))
+          if v is not None}
+    seg = train_segmenter(images, labels, names=names, n_jobs=args.jobs, seed=args.seed,
+                          progress=args.progress, **kw)
+    save_segmenter(seg, args.out)
+    s = seg.scores
+    print(f"wrote {args.out}: {len(names)} images, {seg.label_counts['crack_sampled']} crack / "
+          f"{seg.label_counts['not_crack_sampled']} not-crack pixels; out-of-bag crack F1 "
+          f"{s.get('crack_f1', float('nan')):.3f} (optimistic: pixels of the training images)")
     return 0
 
 

@@ -27,19 +27,15 @@ Module constants (documented defaults of :func:`train_segmenter`):
 """
 from __future__ import annotations
 
-import json
-import os
-import pathlib
-import tempfile
-import zipfile
+import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from .errors import InputError
 
-__all__ = ["Segmenter", "train_segmenter", "load_segmenter", "save_segmenter",
-           "labels_from_mask", "segmenter_features", "TRUSTED_TYPES"]
+__all__ = ["Segmenter", "train_segmenter", "labels_from_mask", "segmenter_features", "FORMAT",
+           "VERSION"]
 
 FORMAT = "semkit.segmenter"
 VERSION = 1
@@ -60,16 +56,6 @@ BACKGROUND_PX = 15
 FAR_PX = 3.0
 _TREES_PER_STEP = 10
 
-#: Every type a segmenter file may contain (module.class as skops writes it in schema.json).
-TRUSTED_TYPES = frozenset({
-    "builtins.dict", "builtins.list", "builtins.tuple", "builtins.str", "builtins.int",
-    "builtins.float", "builtins.bool", "builtins.NoneType",
-    "numpy.ndarray", "numpy.dtype", "numpy.int64", "numpy.int32", "numpy.intp",
-    "numpy.float64", "numpy.float32", "numpy.bool_",
-    "sklearn.ensemble._forest.RandomForestClassifier",
-    "sklearn.tree._classes.DecisionTreeClassifier",
-    "sklearn.tree._tree.Tree",
-})
 
 
 def _as_unit_float(grey):
@@ -297,6 +283,9 @@ def train_segmenter(images, labels, *, names=None, sigma_min=SIGMA_MIN_PX,
     if not images or len(images) != len(labels) or len(names) != len(images):
         raise InputError(f"labels: expected one label image per image, got {len(images)} "
                          f"images and {len(labels)} label images")
+    if not n_trees >= 1 or not samples_per_class >= 1:
+        raise InputError(f"n_trees, samples_per_class: expected >= 1, got {n_trees}, "
+                         f"{samples_per_class}")
     feats = _feature_settings(sigma_min, sigma_max, num_sigma)
     rng = np.random.default_rng(seed)
     X, y = [], []
@@ -337,7 +326,9 @@ def train_segmenter(images, labels, *, names=None, sigma_min=SIGMA_MIN_PX,
             step = min(_TREES_PER_STEP, n_trees - rf.n_estimators)
             rf.set_params(n_estimators=rf.n_estimators + step,
                           oob_score=rf.n_estimators + step == n_trees)
-            rf.fit(X, y)
+            with warnings.catch_warnings():  # few trees: some pixels have no OOB vote
+                warnings.filterwarnings("ignore", "Some inputs do not have OOB scores")
+                rf.fit(X, y)
             bar.update(step)
     scores = _oob_scores(rf, y, threshold)
     return Segmenter(model=rf, features=feats, threshold=float(threshold),
@@ -365,79 +356,3 @@ def _oob_scores(rf, y, threshold):
             delattr(rf, a)
     rf.set_params(warm_start=False, oob_score=False, n_jobs=None)
     return out
-
-
-def save_segmenter(segmenter, path):
-    """Write a segmenter with :func:`skops.io.dump` (no pickle), atomically."""
-    import skops.io as sio
-    path = pathlib.Path(path)
-    obj = segmenter.describe()
-    obj["model"] = segmenter.model
-    fd, tmp = tempfile.mkstemp(dir=path.parent if str(path.parent) else ".",
-                               prefix=f".{path.name}.", suffix=".tmp")
-    os.close(fd)
-    try:
-        sio.dump(obj, tmp, compression=zipfile.ZIP_DEFLATED)
-        os.replace(tmp, path)
-    finally:
-        if os.path.exists(tmp):
-            os.remove(tmp)
-
-
-def _file_types(path):
-    """Every module.class named in a skops file's schema."""
-    with zipfile.ZipFile(path) as z:
-        schema = json.loads(z.read("schema.json"))
-    found = set()
-    stack = [schema]
-    while stack:
-        n = stack.pop()
-        if isinstance(n, dict):
-            if "__module__" in n and "__class__" in n:
-                found.add(f"{n['__module__']}.{n['__class__']}")
-            stack.extend(n.values())
-        elif isinstance(n, list):
-            stack.extend(n)
-    return found
-
-
-def load_segmenter(path, *, n_jobs=None):
-    """Read a segmenter written by :func:`save_segmenter`, refusing any untrusted type.
-
-    Raises
-    ------
-    InputError
-        Missing or unreadable file, a type outside :data:`TRUSTED_TYPES`, or not a semkit
-        segmenter.
-    """
-    import skops.io as sio
-    path = pathlib.Path(path)
-    if not path.is_file():
-        raise InputError(f"{path}: segmenter file not found")
-    try:
-        types = _file_types(path)
-    except (zipfile.BadZipFile, KeyError, ValueError, OSError) as e:
-        raise InputError(f"{path}: not a skops segmenter file ({type(e).__name__})") from None
-    bad = sorted(types - TRUSTED_TYPES)
-    if bad:
-        raise InputError(f"{path}: refusing to load untrusted type(s) {', '.join(bad)}")
-    try:
-        obj = sio.load(path, trusted=sorted(sio.get_untrusted_types(file=path)))
-    except Exception as e:  # noqa: BLE001 (a damaged file of trusted types)
-        raise InputError(f"{path}: cannot read segmenter ({type(e).__name__}: {e})") from None
-    from sklearn.ensemble import RandomForestClassifier
-    if (not isinstance(obj, dict) or obj.get("format") != FORMAT
-            or not isinstance(obj.get("model"), RandomForestClassifier)):
-        raise InputError(f"{path}: not a semkit segmenter (format {FORMAT!r} with a random "
-                         "forest expected)")
-    if obj.get("version") != VERSION:
-        raise InputError(f"{path}: segmenter version {obj.get('version')!r}; this semkit "
-                         f"reads version {VERSION}: retrain with semkit train-segmenter")
-    feats = obj["features"]
-    if feats.get("n_features") != obj["model"].n_features_in_:
-        raise InputError(f"{path}: features record {feats.get('n_features')} features, the "
-                         f"forest expects {obj['model'].n_features_in_}")
-    return Segmenter(model=obj["model"], features=feats, threshold=float(obj["threshold"]),
-                     classes=tuple(obj["classes"]), training_images=list(obj["training_images"]),
-                     label_counts=dict(obj["label_counts"]), scores=dict(obj["scores"]),
-                     seed=int(obj["seed"]), n_jobs=n_jobs)
