@@ -37,7 +37,7 @@ _LAZY = {
     "mineral_phases": "grains", "segment_grains": "grains", "grain_table": "grains",
     "grain_size_table": "grains", "slenderness": "grains", "grains_stage": "grains",
     "plot_grain_histograms": "grains", "plot_grain_map": "grains",
-    "classify_pre": "classify", "classify_post": "classify", "post_features": "classify",
+    "classify_pre": "classify", "classify_post": "classify", "crack_morphology": "classify",
     "classify_stage": "classify", "train_post": "classify", "save_model": "classify",
     "load_model": "classify", "apply_labels": "classify", "read_labels": "classify",
     "damage_ratio": "indices", "heterogeneity_index": "indices", "mhi": "indices",

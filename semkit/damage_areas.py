@@ -36,24 +36,49 @@ def darkness_fraction(image, crack_labels, *, core=None, band_px=PV_BAND_PX,
     -------
     f : (M, N) ndarray of float64
         clip((B - I) / (B - I_core), 0, 1) within ``band_px`` of an object, else 0.
-    nearest : tuple of two (M, N) ndarrays of int
-        Row and column of the nearest object pixel (for ownership).
+    owner : (M, N) ndarray of int
+        Label of the nearest object pixel (which object a band pixel belongs to).
+
+    Notes
+    -----
+    OpenCV's 5 x 5 distance transform (within 2 % of the Euclidean distance) finds the band
+    and the nearest object; B is a normalised Gaussian convolution of the pixels farther than
+    ``band_px + 1`` from any object.
     """
-    from scipy import ndimage as ndi
+    import cv2
     img = np.asarray(image, dtype=np.float64)
-    obj = np.asarray(crack_labels) > 0
-    dist, (ir, ic) = ndi.distance_transform_edt(~obj, return_indices=True)
+    lab = np.asarray(crack_labels)
+    obj = lab > 0
+    dist, near = cv2.distanceTransformWithLabels((~obj).astype(np.uint8), cv2.DIST_L2, 5,
+                                                 labelType=cv2.DIST_LABEL_PIXEL)
+    src = np.zeros(int(near.max()) + 1, lab.dtype)
+    src[near[obj]] = lab[obj]
+    owner = src[near]
     region = dist <= band_px
     bg_mask = dist > band_px + 1
-    num = ndi.gaussian_filter(np.where(bg_mask, img, 0.0), background_sigma_px)
-    den = ndi.gaussian_filter(bg_mask.astype(np.float64), background_sigma_px)
+
+    def blur(a):
+        return cv2.GaussianBlur(a, (0, 0), background_sigma_px,
+                                borderType=cv2.BORDER_REFLECT)
+    num = blur(np.where(bg_mask, img, 0.0))
+    den = blur(bg_mask.astype(np.float64))
     fill = np.median(img[bg_mask]) if bg_mask.any() else img.max()
     bg = np.where(den > 1e-3, num / np.maximum(den, 1e-3), fill)
     if core is None:
         core = float(np.percentile(img[obj], 2)) if obj.any() else float(img.min())
     f = np.clip((bg - img) / np.maximum(bg - float(core), 1e-6), 0.0, 1.0)
     f[~region] = 0.0
-    return f, (ir, ic)
+    return f, owner
+
+
+def _owner_types(type_image, lab, owner):
+    """Type of each band pixel: its own where it is an object pixel, else that of its
+    nearest object's pixels (the object's majority type)."""
+    n = int(lab.max())
+    counts = np.zeros((n + 1, 4), np.int64)
+    np.add.at(counts, (lab[lab > 0], np.clip(type_image[lab > 0], 0, 3)), 1)
+    major = counts.argmax(axis=1)
+    return np.where(lab > 0, type_image, major[owner])
 
 
 def typed_areas(image, crack_labels, type_image=None, *, core=None, band_px=PV_BAND_PX,
@@ -87,7 +112,7 @@ def typed_areas(image, crack_labels, type_image=None, *, core=None, band_px=PV_B
     Notes
     -----
     f = clip((B - I) / (B - I_core), 0, 1) with B the local background; area = sum f over the
-    object and its band (band pixels belong to the nearest object and take its pixel type).
+    object and its band (band pixels belong to the nearest object and take its majority type).
     """
     img = np.asarray(image, dtype=np.float64)
     lab = np.asarray(crack_labels)
@@ -98,11 +123,10 @@ def typed_areas(image, crack_labels, type_image=None, *, core=None, band_px=PV_B
     if n == 0:
         return pd.DataFrame(columns=cols)
     obj = lab > 0
-    f, (ir, ic) = darkness_fraction(img, lab, core=core, band_px=band_px,
-                                    background_sigma_px=background_sigma_px)
-    owner = lab[ir, ic]
+    f, owner = darkness_fraction(img, lab, core=core, band_px=band_px,
+                                 background_sigma_px=background_sigma_px)
     types = np.zeros(lab.shape, np.int64) if type_image is None else \
-        np.asarray(type_image).astype(np.int64)[ir, ic]
+        _owner_types(np.asarray(type_image).astype(np.int64), lab, owner)
     out = {"crack_id": np.arange(1, n + 1),
            "area_pv_px": np.bincount(owner.ravel(), f.ravel(), minlength=n + 1)[1:]}
     for k, name in ((1, "area_T_px"), (2, "area_S_px"), (3, "area_M_px")):

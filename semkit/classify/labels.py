@@ -40,7 +40,8 @@ def apply_labels(cracks, labels):
     -------
     cracks : pandas.DataFrame
         Copy with overridden types, ``confidence`` 1 and ``type_source`` "user" on those rows
-        (``model`` elsewhere). Per-pixel fractions of an overridden post type are set to it.
+        (``model`` elsewhere). The fractions and probabilities of an overridden post type are
+        set to it, and it is trusted (``type_post_ok``).
     """
     out = cracks.copy()
     if "type_source" not in out.columns:
@@ -56,8 +57,14 @@ def apply_labels(cracks, labels):
         out.loc[i, col] = t
         out.loc[i, "confidence"] = 1.0
         out.loc[i, "type_source"] = "user"
-        if col == "type_post" and "frac_tensile" in out.columns:
-            for name, c in (("tensile", "frac_tensile"), ("shear", "frac_shear"),
-                            ("mixed", "frac_mixed")):
-                out.loc[i, c] = 1.0 if t == name else 0.0
+        if col == "type_post":
+            for name, f, p in (("tensile", "frac_tensile", "p_tensile"),
+                               ("shear", "frac_shear", "p_shear"),
+                               ("mixed", "frac_mixed", "p_mixed")):
+                for c in (f, p):
+                    if c in out.columns:
+                        out.loc[i, c] = 1.0 if t == name else 0.0
+            if "type_post_ok" in out.columns:
+                out.loc[i, "type_post_ok"] = True
+                out.loc[i, "type_note"] = ""
     return out

@@ -5,20 +5,15 @@ from __future__ import annotations
 import numpy as np
 
 from ..damage_areas import typed_areas
-from .post import classify_post
+from .post import POST_COLUMNS, classify_post
 from .pre import classify_pre
 
 __all__ = ["classify_stage"]
 
 
-_POST_COLUMNS = ("frac_tensile", "frac_shear", "frac_mixed", "tensile_fraction",
-                 "aperture_mean_px", "aperture_cv", "dark_density", "skeleton_density",
-                 "endpoint_density", "excess_dark", "skeleton_scatter", "dark_fill",
-                 "layer_lift", "layer_side")
-
-
 def classify_stage(cracks, crack_labels, *, grey=None, pixel_size_um=1.0, model=None,
-                   post=True, grain_labels=None):
+                   post=True, grain_labels=None, skeleton=None, background=None,
+                   crack_level=None):
     """Add crack types, confidences, features and partial-volume areas to ``cracks.csv`` rows.
 
     Parameters
@@ -36,13 +31,17 @@ def classify_stage(cracks, crack_labels, *, grey=None, pixel_size_um=1.0, model=
         Classify tensile/shear/mixed (False for pre-test images: ``type_post`` "unknown").
     grain_labels : (M, N) ndarray of int, optional
         Grain map: classify inter/intra/trans (``type_pre``).
+    skeleton, background, crack_level : optional
+        The analysis's skeleton and threshold background / crack-core grey (re-estimated
+        when not given).
 
     Returns
     -------
     cracks : pandas.DataFrame
         Copy with ``type_pre, type_post, confidence`` (post-test confidence, or the pre-existing
-        one when only that was classified), ``confidence_pre``, the post features,
-        ``frac_tensile, frac_shear, frac_mixed`` and ``area_pv_um2``.
+        one when only that was classified), ``confidence_pre``, the post-test columns of
+        :func:`semkit.classify.classify_post` (probabilities, ``type_post_ok``, ``type_note``,
+        ``frac_*``, the morphology) and ``area_pv_um2``.
     """
     out = cracks.copy()
     lab = np.asarray(crack_labels)
@@ -57,12 +56,12 @@ def classify_stage(cracks, crack_labels, *, grey=None, pixel_size_um=1.0, model=
         out["confidence_pre"] = t["confidence"].to_numpy()
         out["confidence"] = out["confidence_pre"]
     if post and len(out):
-        t, _ = classify_post(lab, image=grey, model=model)
+        t, _ = classify_post(lab, image=grey, skeleton=skeleton, background=background,
+                             crack_level=crack_level, model=model)
         t = t.set_index("crack_id").reindex(ids)
-        out["type_post"] = t["type_post"].fillna("unknown").to_numpy()
-        out["confidence"] = t["confidence"].to_numpy()
-        for c in _POST_COLUMNS:
+        for c in POST_COLUMNS:
             out[c] = t[c].to_numpy()
+        out["type_post"] = t["type_post"].fillna("unknown").to_numpy()
     elif len(out):
         out["type_post"] = "unknown"
     return out
