@@ -94,9 +94,12 @@ def analyse_file(path, *, manifest_row=None, pixel_size_um=None, overlay_dir=Non
         row["seconds"] = time.perf_counter() - t0
         if overlay_dir is not None:
             from .plot import overlay_cracks
+            o = a.objects
             write_image(pathlib.Path(overlay_dir) / (path.stem + "_overlay.png"),
-                        overlay_cracks(a.image, a.labels, pore_ids=a.objects.loc[
-                            a.objects["is_pore"], "crack_id"].to_numpy()))
+                        overlay_cracks(a.image, a.labels,
+                                       pore_ids=o.loc[o["is_pore"], "crack_id"].to_numpy(),
+                                       rejected_ids=a.rejected["crack_id"].to_numpy(),
+                                       region=a.region.mask))
         grains = None
         if a.grain_map is not None:
             lab, ph, grains = a.grain_map

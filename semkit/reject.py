@@ -1,0 +1,151 @@
+"""Objects that are dark but not cracks, told apart by shape and by their surroundings.
+
+Every cleaned object gets a few measures (:func:`object_evidence`):
+
+* ``side_depth`` — how far the object's dark core (its 20th percentile grey) is below the
+  *darker* side of its surroundings (the 25th percentile of a 2-px ring around it), as a share
+  of that side's contrast to the crack core.
+  A crack is darker than the rock on both of its sides; the dark rim at the edge of a bright
+  grain (a halo, a boundary line) is darker only than the bright side.
+* ``elongation`` — sqrt of the ratio of the principal second moments (1 for a disc).
+* ``width_px`` — mean width, area over skeleton length; ``slenderness`` — skeleton length
+  over mean width (a curved crack is slender even when its moments are not elongated).
+* ``hole_density`` — small enclosed holes (< ``HOLE_MAX_PX``) per 100 px of skeleton: a
+  spongy, mottled dark area is riddled with them, a crack network encloses whole grains.
+* ``texture`` — grey standard deviation of the ring in noise sigmas: a mottled, altered grain
+  is rough around the object, a crack in a clear grain is not.
+
+:func:`reject_objects` applies the rules (:data:`RULES`, thresholds in :mod:`semkit.config`)
+and returns the reason per object (``""`` for a crack). Rejected objects stay in
+``cracks.csv`` with ``rejected_as`` set and count in no sum.
+"""
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+from . import config
+
+__all__ = ["object_evidence", "reject_objects", "RULES"]
+
+#: the rules in the order they are tried: name, test on the evidence table
+RULES = (
+    ("phase_rim", lambda e: (e.side_depth < config.REJECT_SIDE_DEPTH)
+     & (e.slenderness < config.REJECT_RIM_MAX_SLENDERNESS)),
+    ("compact_dark", lambda e: (e.slenderness < config.REJECT_COMPACT_SLENDERNESS)
+     & (e.width_px >= config.REJECT_COMPACT_WIDTH_PX)),
+    ("mottled", lambda e: (e.hole_density >= config.REJECT_MOTTLED_HOLES)
+     & (e.texture >= config.REJECT_MOTTLED_TEXTURE)),
+)
+
+
+def _ring_percentile(grey, labels, n, q, width=2):
+    """Per object: the ``q`` percentile of ``grey`` in a ``width``-px ring around it."""
+    import cv2
+    k = cv2.getStructuringElement(cv2.MORPH_RECT, (2 * width + 1, 2 * width + 1))
+    grown = cv2.dilate(labels.astype(np.float32), k).astype(np.int64)
+    ring = (labels == 0) & (grown > 0)
+    lab = grown[ring]
+    val = grey[ring]
+    out = np.full(n + 1, np.nan)
+    sd = np.full(n + 1, np.nan)
+    if lab.size == 0:
+        return out, sd
+    order = np.lexsort((val, lab))
+    lab, val = lab[order], val[order]
+    start = np.searchsorted(lab, np.arange(n + 1), "left")
+    stop = np.searchsorted(lab, np.arange(n + 1), "right")
+    cnt = stop - start
+    has = cnt > 0
+    idx = start + np.floor((cnt - 1) * q / 100.0).astype(np.int64)
+    out[has] = val[idx[has]]
+    s1 = np.bincount(lab, weights=val, minlength=n + 1)
+    s2 = np.bincount(lab, weights=val.astype(np.float64) ** 2, minlength=n + 1)
+    c = np.maximum(cnt, 1)
+    sd[has] = np.sqrt(np.maximum(s2[has] / c[has] - (s1[has] / c[has]) ** 2, 0.0))
+    return out, sd
+
+
+def object_evidence(labels, n, grey, *, crack_level, noise, skeleton=None):
+    """Shape and surroundings of every object (see the module docstring).
+
+    Parameters
+    ----------
+    labels : (M, N) ndarray of int
+        Objects 1..n.
+    n : int
+    grey : (M, N) ndarray
+        Flattened, denoised grey image.
+    crack_level : float
+        Crack core grey.
+    noise : float
+        Pixel-noise sigma.
+    skeleton : (M, N) ndarray of bool, optional
+
+    Returns
+    -------
+    evidence : pandas.DataFrame
+        Index 1..n: ``area_px, side_depth, elongation, width_px, slenderness, hole_density,
+        texture``.
+    """
+    import cv2
+    from scipy import ndimage as ndi
+
+    from .measure import object_moments
+    lab = np.asarray(labels)
+    g = np.asarray(grey, np.float32)
+    ids = np.arange(1, n + 1)
+    # the object's dark core: its 20th percentile (a thin crack is mostly partial-volume rim)
+    core = np.full(n + 1, np.nan)
+    if n:
+        core[1:] = ndi.labeled_comprehension(g, lab, ids, lambda v: np.percentile(v, 20),
+                                             np.float64, np.nan)
+    ring_lo, ring_sd = _ring_percentile(g, lab, n, 25.0)
+    side_depth = (ring_lo - core) / np.maximum(ring_lo - float(crack_level), 1e-3)
+    area, _, _, mxx, myy, mxy, _, _ = object_moments(lab, n)
+    half = 0.5 * (mxx + myy)
+    disc = np.sqrt(0.25 * (mxx - myy) ** 2 + mxy ** 2)
+    elong = np.sqrt(np.maximum(half + disc, 1e-9) / np.maximum(half - disc, 1e-2))
+    if skeleton is None:
+        from .skeleton import skeletonize
+        skeleton = skeletonize(lab > 0)
+    sk = np.bincount(lab[np.asarray(skeleton, bool)], minlength=n + 1).astype(float)
+    width = area / np.maximum(sk, 1.0)
+    # small holes: background components enclosed by one object
+    filled = ndi.binary_fill_holes(lab > 0)
+    holes = filled & (lab == 0)
+    nh, hl, hst, _ = cv2.connectedComponentsWithStats(holes.view(np.uint8), connectivity=4)
+    hole_density = np.zeros(n + 1)
+    if nh > 1:
+        small = np.flatnonzero(hst[1:, cv2.CC_STAT_AREA] < config.HOLE_MAX_PX) + 1
+        if small.size:
+            # the object around a hole: the label just left of the hole's leftmost pixel
+            x = hst[small, cv2.CC_STAT_LEFT] - 1
+            y = np.array([np.flatnonzero(hl[:, xx + 1] == h)[0] for xx, h in zip(x, small)])
+            owner = lab[y, np.maximum(x, 0)]
+            hole_density = np.bincount(owner, minlength=n + 1) / np.maximum(sk, 1.0) * 100
+    texture = ring_sd / max(float(noise), 1e-6)
+    ev = pd.DataFrame(dict(area_px=area, side_depth=side_depth, elongation=elong, width_px=width,
+                           slenderness=sk / np.maximum(width, 1e-9),
+                           hole_density=hole_density, texture=texture), index=np.arange(n + 1))
+    return ev.iloc[1:]
+
+
+def reject_objects(evidence):
+    """The first rule of :data:`RULES` each object meets (``""``: kept as a crack).
+
+    Parameters
+    ----------
+    evidence : pandas.DataFrame
+        :func:`object_evidence` output.
+
+    Returns
+    -------
+    rejected_as : pandas.Series of str
+    """
+    out = pd.Series("", index=evidence.index, dtype=object)
+    judged = (evidence["area_px"] >= config.REJECT_MIN_AREA_PX).to_numpy(bool)
+    for name, rule in RULES:
+        hit = rule(evidence).fillna(False).to_numpy(bool) & judged
+        out[(out == "") & hit] = name
+    return out
