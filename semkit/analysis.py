@@ -343,8 +343,12 @@ class CrackAnalysis:
     # stage 7: crack types
     @property
     def typing_post(self):
-        """True when this image's cracks are typed tensile / shear / mixed."""
-        return bool(self.options.classify) and self.stage != "pre-test"
+        """True when this image's cracks are typed tensile / shear / mixed (see
+        :attr:`AnalysisOptions.classify`: by default only on loaded stages of the manifest)."""
+        c = self.options.classify
+        if c is None:
+            return self.stage in LOADED_STAGES
+        return bool(c) and self.stage != "pre-test"
 
     @functools.cached_property
     def typed_cracks(self):
@@ -357,6 +361,19 @@ class CrackAnalysis:
                               pixel_size_um=self.pixel_size_um, model=model,
                               post=self.typing_post,
                               grain_labels=None if self.grain_map is None else self.grain_map[0])
+
+    def full_size(self, a):
+        """``a`` (an array of ``image``'s shape) padded back to the raw image's shape: the
+        cropped data bar rows are 0."""
+        bar = self.data_bar
+        if bar is None:
+            return a
+        out = np.zeros(self.raw_image.shape, a.dtype)
+        if bar.side == "top":
+            out[bar.row1:] = a
+        else:
+            out[:bar.row0] = a
+        return out
 
     def crack_rows(self) -> pd.DataFrame:
         """The rows this image contributes to ``cracks.csv``: the cracks, then the rejected

@@ -35,8 +35,10 @@ class AnalysisOptions:
     bridge_gaps : bool
         Close 1-px gaps along thin cracks (3 x 3 closing) so a 1-px crack whose blurred core
         dips under the detection level stays one object.
-    classify : bool
-        Post-test typing (tensile / shear / mixed), ``type_post``, ``confidence``, P.
+    classify : bool or None
+        Post-test typing (tensile / shear / mixed), ``type_post``, ``confidence``, P. None
+        (default): only images whose ``manifest.csv`` stage is a loaded one (initiating,
+        propagation, failure); True: every image not marked pre-test; False: none.
     crack_model : str or None
         JSON model from ``semkit classify --train`` (default: the built-in one).
     grains : bool
@@ -66,7 +68,7 @@ class AnalysisOptions:
     length: bool = True
     exclude_pores: bool = True
     bridge_gaps: bool = True
-    classify: bool = True
+    classify: bool | None = None
     crack_model: str | None = None
     grains: bool = False
     minerals: str | None = None
