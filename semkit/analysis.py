@@ -192,9 +192,18 @@ class CrackAnalysis:
             t = self.thresholded
             det, area = t.detect_mask, t.mask
             if self.ridge is not None:
+                # ridge lines add cracks the threshold missed; lines touching a threshold
+                # object are left out, so the threshold's objects keep their shape
+                import cv2
                 rm, depth = self.ridge
-                det = det | rm
-                area = area | (rm & (depth >= config.AUTO_AREA_FRACTION))
+                n, lab = cv2.connectedComponents(rm.view(np.uint8), connectivity=8)
+                near = cv2.dilate(det.view(np.uint8), np.ones((3, 3), np.uint8)).view(bool)
+                touch = np.zeros(n, bool)
+                touch[lab[near & rm]] = True
+                touch[0] = True
+                new = ~touch[lab]
+                det = det | new
+                area = area | (new & (depth >= config.AUTO_AREA_FRACTION))
         inside = self.region.mask
         return det & inside, area & inside
 
@@ -286,7 +295,8 @@ class CrackAnalysis:
         from .threshold import noise_sigma
         return object_evidence(self.labels, self.n_objects, self.smooth,
                                crack_level=self.crack_level, noise=noise_sigma(self.smooth),
-                               skeleton=self.skeleton if self.options.length else None)
+                               skeleton=self.skeleton if self.options.length else None,
+                               region=self.region.mask)
 
     @functools.cached_property
     def rejected_as(self):

@@ -64,7 +64,8 @@ def _to_u8(image):
 
 
 def _row_flatness(u8, tol):
-    """Per row and per third of the width: share of pixels within ``tol`` of the row's mode."""
+    """Per row: the least share, over the thirds of the width, of pixels within ``tol`` of the
+    row's mode; the share over the whole row; the mode."""
     h, w = u8.shape
     q = (u8 >> 2).astype(np.int64)  # 64 bins
     counts = np.zeros((h, 64), np.int64)
@@ -72,18 +73,25 @@ def _row_flatness(u8, tol):
     mode = counts.argmax(axis=1) * 4 + 2
     near = np.abs(u8.astype(np.int16) - mode[:, None]) <= tol
     thirds = [near[:, k * w // 3:(k + 1) * w // 3].mean(axis=1) for k in range(3)]
-    return np.min(thirds, axis=0), mode
+    return np.min(thirds, axis=0), near.mean(axis=1), mode
 
 
 def find_data_bar(image, *, min_flat=config.DATABAR_MIN_FLAT):
     """Find an SEM information bar along the bottom or top edge.
+
+    Bar rows, counted from the edge: at least ``min_flat`` of the row's pixels are at its
+    modal grey, that mode is the bar's background (the mode of the edge row), and in most of
+    them this holds in every third of the width. Rows of text or a thick scale bar may
+    interrupt the run for at most ``DATABAR_MAX_GAP_ROWS``. The run must end abruptly (the
+    next rows are textured sample) and carry ink: pixels at the other end of the grey scale
+    (white text on a dark bar, dark text on a light one).
 
     Parameters
     ----------
     image : (M, N) ndarray
         The micrograph as saved by the microscope.
     min_flat : float
-        Least share of each third of a bar row that holds the row's modal grey.
+        Least share of each third of a bar row that holds the bar's background grey.
 
     Returns
     -------
@@ -102,13 +110,17 @@ def find_data_bar(image, *, min_flat=config.DATABAR_MIN_FLAT):
     if h < 40 or u8.shape[1] < 40:
         return None
     step = max(u8.shape[1] // 1024, 1)
-    flat, mode = _row_flatness(np.ascontiguousarray(u8[:, ::step]), config.DATABAR_TOL_GREY)
-    is_bar = flat >= min_flat
+    thirds, flat, mode = _row_flatness(np.ascontiguousarray(u8[:, ::step]),
+                                       config.DATABAR_TOL_GREY)
+    tol = config.DATABAR_TOL_GREY + 2
     for side in ("bottom", "top"):
-        rows = is_bar[::-1] if side == "bottom" else is_bar
-        # a run from the edge, allowing short gaps (text lines that fill a row)
+        fl = flat[::-1] if side == "bottom" else flat
+        th = thirds[::-1] if side == "bottom" else thirds
+        md = mode[::-1] if side == "bottom" else mode
+        ref = int(md[0])
+        is_bar = (fl >= min_flat) & (np.abs(md - ref) <= tol)
         n, gap = 0, 0
-        for k, b in enumerate(rows):
+        for k, b in enumerate(is_bar):
             if b:
                 n, gap = k + 1, 0
             else:
@@ -118,17 +130,19 @@ def find_data_bar(image, *, min_flat=config.DATABAR_MIN_FLAT):
         if n < max(config.DATABAR_MIN_ROWS, int(config.DATABAR_MIN_FRACTION * h)) or \
                 n > config.DATABAR_MAX_FRACTION * h:
             continue
-        # an abrupt start: the rows just past the bar are sample, not flat
-        sample_flat = (flat[::-1] if side == "bottom" else flat)[n:n + 3]
-        if sample_flat.max() > config.DATABAR_SAMPLE_FLAT:
+        # an abrupt start: the rows just past the bar are sample (a round core's corners fade),
+        # and the background spans the width in most bar rows (a core's corner does not)
+        if fl[n:n + 3].max(initial=0.0) > config.DATABAR_SAMPLE_FLAT or \
+                np.mean(th[:n] >= min_flat) < 0.5:
             continue
         r0, r1 = (h - n, h) if side == "bottom" else (0, n)
-        bg = float(np.median(mode[r0:r1]))
-        # a bar carries text or a scale bar; empty rows are a surround (semkit.roi)
-        ink = np.abs(u8[r0:r1].astype(np.int16) - int(bg)) > config.DATABAR_INK_GREY
+        # a bar carries text or a scale bar at the other end of the grey scale
+        rows = u8[r0:r1]
+        ink = rows >= 255 - config.DATABAR_INK_GREY if ref < 128 else \
+            rows <= config.DATABAR_INK_GREY
         if ink.mean() < config.DATABAR_MIN_INK:
             continue
-        return DataBar(r0, r1, side, bg)
+        return DataBar(r0, r1, side, float(ref))
     return None
 
 
@@ -164,7 +178,36 @@ def _normalise(glyph):
     return r / (np.linalg.norm(r) + 1e-9), asp
 
 
-def _read_glyphs(fg, boxes, height):
+def _words(glyphs):
+    """Group glyph boxes ``(r0, c0, r1, c1, id)`` into words: same text line (vertical
+    overlap), horizontal gaps under one glyph height; each word sorted by x."""
+    glyphs = sorted(glyphs, key=lambda g: g[1])
+    lines = []
+    for g in glyphs:
+        for ln in lines:
+            r0, r1 = min(x[0] for x in ln), max(x[2] for x in ln)
+            if min(r1, g[2]) - max(r0, g[0]) > 0.3 * min(r1 - r0, g[2] - g[0]) or \
+                    (g[2] - g[0] < 0.35 * (r1 - r0) and r0 <= g[2] <= r1 + 2):
+                ln.append(g)
+                break
+        else:
+            lines.append([g])
+    words = []
+    for ln in lines:
+        ln.sort(key=lambda g: g[1])
+        height = max(g[2] - g[0] for g in ln)
+        cur = [ln[0]]
+        for g in ln[1:]:
+            if g[1] - max(x[3] for x in cur) > config.SCALEBAR_WORD_GAP * height:
+                words.append(cur)
+                cur = [g]
+            else:
+                cur.append(g)
+        words.append(cur)
+    return words
+
+
+def _read_glyphs(boxes, height):
     """OCR of glyph boxes (sorted by x): text and the lowest correlation."""
     names, vecs, aspects = _templates()
     text, conf, prev_x1 = "", 1.0, None
@@ -202,42 +245,61 @@ def read_scale_bar(image, bar):
     """
     import cv2
     u8 = _to_u8(image)[bar.row0:bar.row1]
-    fg = (np.abs(u8.astype(np.int16) - int(bar.background)) > config.DATABAR_INK_GREY
-          ).astype(np.uint8)
+    fg = (u8 >= 255 - config.DATABAR_INK_GREY if bar.background < 128
+          else u8 <= config.DATABAR_INK_GREY).astype(np.uint8)
     n, lab, st, _ = cv2.connectedComponentsWithStats(fg, connectivity=8)
-    w_img = u8.shape[1]
-    lines = [k for k in range(1, n) if st[k, 2] >= config.SCALEBAR_MIN_FRACTION * w_img
-             and st[k, 2] >= 6 * st[k, 3] and st[k, 4] >= 0.6 * st[k, 2] * st[k, 3]]
+    bh, w_img = u8.shape
+    lines = []
+    for k in range(1, n):
+        x, y, w, h, _ = (int(v) for v in st[k])
+        if w < config.SCALEBAR_MIN_FRACTION * w_img or w < 6 * h or h > 0.35 * bh:
+            continue
+        rows = (lab[y:y + h, x:x + w] == k).sum(axis=1)
+        if rows.max() >= 0.95 * w:  # a solid line (end ticks only make the box taller)
+            lines.append((k, float(rows.max())))
     if not lines:
         return None
-    k = max(lines, key=lambda i: st[i, 2])
+    k, length = max(lines, key=lambda t: t[1])
     x0, y0, w, h = (int(v) for v in st[k, :4])
-    # the length is the longest row of the line (end ticks make the box taller, not longer)
-    length = float((lab[y0:y0 + h, x0:x0 + w] == k).sum(axis=1).max())
-    # glyphs: components beside the line, of text size
+    # glyphs: ink components of text size (at a third of the contrast, so thin anti-aliased
+    # strokes and small dots hold together; touching pieces merged), grouped into words
+    half = (np.abs(u8.astype(np.int16) - int(bar.background)) > 85).astype(np.uint8)
+    half[lab == k] = 0
+    n2, lab2, st2, _ = cv2.connectedComponentsWithStats(half, connectivity=8)
     glyphs = []
-    for j in range(1, n):
-        if j == k or j in lines:
+    for j in sorted(range(1, n2), key=lambda i: st2[i, 0]):
+        gx, gy, gw, gh, _ = (int(v) for v in st2[j])
+        if gh > 0.6 * bh or gw > 3 * max(gh, 1) or gh * gw < 2:
             continue
-        gx, gy, gw, gh, ga = (int(v) for v in st[j])
-        if gh < 5 or gh > 0.9 * u8.shape[0] or gw > 4 * gh:
+        g = (gy, gx, gy + gh, gx + gw, (j,))
+        p = glyphs[-1] if glyphs else None
+        if p is not None and gx - p[3] <= 1 and min(p[2], g[2]) - max(p[0], g[0]) > \
+                0.5 * min(p[2] - p[0], gh) and \
+                gx + gw - p[1] <= 1.5 * (max(p[2], gy + gh) - min(p[0], gy)):
+            glyphs[-1] = (min(p[0], gy), p[1], max(p[2], gy + gh), max(p[3], gx + gw),
+                          p[4] + (j,))
+        else:
+            glyphs.append(g)
+    words = _words(glyphs)
+    best = None
+    for word in words:
+        boxes = [((g[0], g[1], g[2], g[3]), np.isin(lab2[g[0]:g[2], g[1]:g[3]], g[4]))
+                 for g in word]
+        height = float(max(g[2] - g[0] for g in word))
+        text, conf = _read_glyphs(boxes, height)
+        m = re.fullmatch(r"(\d+(?:\.\d+)?) ?(nm|µm|um|mm)", text)
+        if not m:
             continue
-        near_x = gx + gw > x0 - 0.6 * w and gx < x0 + 1.6 * w
-        near_y = min(abs(gy + gh - y0), abs(gy - (y0 + h)), abs(gy - y0)) < 3 * max(gh, h)
-        if near_x and near_y:
-            glyphs.append((gy, gx, gy + gh, gx + gw, j))
-    text, conf = "", 0.0
-    if glyphs:
-        # the text line: glyphs whose vertical centre is near the median one
-        mid = np.median([(g[0] + g[2]) / 2 for g in glyphs])
-        height = np.median([g[2] - g[0] for g in glyphs])
-        line = sorted((g for g in glyphs if abs((g[0] + g[2]) / 2 - mid) < 0.6 * height
-                       or (g[2] - g[0]) < 0.35 * height and abs(g[2] - mid) < height),
-                      key=lambda g: g[1])
-        boxes = [((g[0], g[1], g[2], g[3]), lab[g[0]:g[2], g[1]:g[3]] == g[4]) for g in line]
-        text, conf = _read_glyphs(fg, boxes, float(max(g[2] - g[0] for g in line)))
-    m = re.search(r"(\d+(?:\.\d+)?)\s*(nm|µm|um|mm)", text.replace(" ", "").replace("uum", "um"))
-    length_um = float(m.group(1)) * _UNIT_UM[m.group(2)] \
-        if m and conf >= config.SCALEBAR_MIN_CONFIDENCE else float("nan")
+        cy = (min(g[0] for g in word) + max(g[2] for g in word)) / 2
+        cx = (min(g[1] for g in word) + max(g[3] for g in word)) / 2
+        dist = abs(cy - (y0 + h / 2)) + max(0.0, abs(cx - (x0 + w / 2)) - w / 2)
+        if best is None or dist < best[0]:
+            best = (dist, text, conf, float(m.group(1)) * _UNIT_UM[m.group(2)])
+    if best is None:
+        text, conf, length_um = "", 0.0, float("nan")
+    else:
+        _, text, conf, length_um = best
+        if conf < config.SCALEBAR_MIN_CONFIDENCE:
+            length_um = float("nan")
     return ScaleBar(length, text, length_um, conf,
                     (bar.row0 + y0, x0, bar.row0 + y0 + h, x0 + w))

@@ -10,10 +10,18 @@ Every cleaned object gets a few measures (:func:`object_evidence`):
 * ``elongation`` — sqrt of the ratio of the principal second moments (1 for a disc).
 * ``width_px`` — mean width, area over skeleton length; ``slenderness`` — skeleton length
   over mean width (a curved crack is slender even when its moments are not elongated).
-* ``hole_density`` — small enclosed holes (< ``HOLE_MAX_PX``) per 100 px of skeleton: a
-  spongy, mottled dark area is riddled with them, a crack network encloses whole grains.
-* ``texture`` — grey standard deviation of the ring in noise sigmas: a mottled, altered grain
-  is rough around the object, a crack in a clear grain is not.
+* ``background_rel`` — the object's median local background (a 21-px grey closing, which fills
+  every crack narrower than that) relative to the rock's (75th percentile of that closing),
+  both measured from the crack core grey: ~1 for a crack in a clear grain, low inside a dark
+  phase (biotite, opaque minerals), lowered in a mottled, altered grain.
+* ``density`` — the object's median share of detected pixels in a 41 x 41 window around it: a
+  mottled area is riddled with dark specks and squiggles, a crack is one line in clear rock
+  (a mottled object is also sprawling or blotchy, not elongated like a crack with its debris).
+* ``texture`` — grey standard deviation of the ring in noise sigmas (reported, not a rule).
+
+An object whose dark core reaches the crack core grey (``side_depth`` at least
+``REJECT_ZONE_MAX_DEPTH``: an open, void- or epoxy-filled crack) is never rejected for its
+zone: a crack through a dark or mottled grain stays a crack.
 
 :func:`reject_objects` applies the rules (:data:`RULES`, thresholds in :mod:`semkit.config`)
 and returns the reason per object (``""`` for a crack). Rejected objects stay in
@@ -31,11 +39,16 @@ __all__ = ["object_evidence", "reject_objects", "RULES"]
 #: the rules in the order they are tried: name, test on the evidence table
 RULES = (
     ("phase_rim", lambda e: (e.side_depth < config.REJECT_SIDE_DEPTH)
-     & (e.slenderness < config.REJECT_RIM_MAX_SLENDERNESS)),
+     & (e.slenderness < config.REJECT_RIM_MAX_SLENDERNESS)
+     & (e.width_px >= config.REJECT_RIM_MIN_WIDTH_PX)),
     ("compact_dark", lambda e: (e.slenderness < config.REJECT_COMPACT_SLENDERNESS)
      & (e.width_px >= config.REJECT_COMPACT_WIDTH_PX)),
-    ("mottled", lambda e: (e.hole_density >= config.REJECT_MOTTLED_HOLES)
-     & (e.texture >= config.REJECT_MOTTLED_TEXTURE)),
+    ("dark_phase", lambda e: (e.background_rel < config.REJECT_DARK_BACKGROUND)
+     & (e.side_depth < config.REJECT_ZONE_MAX_DEPTH)),
+    ("mottled", lambda e: (e.background_rel < config.REJECT_MOTTLED_BACKGROUND)
+     & (e.density >= config.REJECT_MOTTLED_DENSITY)
+     & (e.elongation < config.REJECT_MOTTLED_MAX_ELONGATION)
+     & (e.side_depth < config.REJECT_ZONE_MAX_DEPTH)),
 )
 
 
@@ -66,7 +79,7 @@ def _ring_percentile(grey, labels, n, q, width=2):
     return out, sd
 
 
-def object_evidence(labels, n, grey, *, crack_level, noise, skeleton=None):
+def object_evidence(labels, n, grey, *, crack_level, noise, skeleton=None, region=None):
     """Shape and surroundings of every object (see the module docstring).
 
     Parameters
@@ -81,12 +94,14 @@ def object_evidence(labels, n, grey, *, crack_level, noise, skeleton=None):
     noise : float
         Pixel-noise sigma.
     skeleton : (M, N) ndarray of bool, optional
+    region : (M, N) ndarray of bool, optional
+        Sample region (the rock's background level is read inside it).
 
     Returns
     -------
     evidence : pandas.DataFrame
-        Index 1..n: ``area_px, side_depth, elongation, width_px, slenderness, hole_density,
-        texture``.
+        Index 1..n: ``area_px, side_depth, elongation, width_px, slenderness, background_rel,
+        density, texture``.
     """
     import cv2
     from scipy import ndimage as ndi
@@ -111,23 +126,23 @@ def object_evidence(labels, n, grey, *, crack_level, noise, skeleton=None):
         skeleton = skeletonize(lab > 0)
     sk = np.bincount(lab[np.asarray(skeleton, bool)], minlength=n + 1).astype(float)
     width = area / np.maximum(sk, 1.0)
-    # small holes: background components enclosed by one object
-    filled = ndi.binary_fill_holes(lab > 0)
-    holes = filled & (lab == 0)
-    nh, hl, hst, _ = cv2.connectedComponentsWithStats(holes.view(np.uint8), connectivity=4)
-    hole_density = np.zeros(n + 1)
-    if nh > 1:
-        small = np.flatnonzero(hst[1:, cv2.CC_STAT_AREA] < config.HOLE_MAX_PX) + 1
-        if small.size:
-            # the object around a hole: the label just left of the hole's leftmost pixel
-            x = hst[small, cv2.CC_STAT_LEFT] - 1
-            y = np.array([np.flatnonzero(hl[:, xx + 1] == h)[0] for xx, h in zip(x, small)])
-            owner = lab[y, np.maximum(x, 0)]
-            hole_density = np.bincount(owner, minlength=n + 1) / np.maximum(sk, 1.0) * 100
+    # the zone around the object: local background and detection density
+    bg = cv2.morphologyEx(g, cv2.MORPH_CLOSE, cv2.getStructuringElement(
+        cv2.MORPH_ELLIPSE, (config.ZONE_CLOSING_PX, config.ZONE_CLOSING_PX)))
+    inside = bg if region is None else bg[np.asarray(region, bool)]
+    ref = float(np.percentile(inside, 75)) if inside.size else float(bg.max())
+    rel = (bg - float(crack_level)) / max(ref - float(crack_level), 1e-3)
+    dens = cv2.blur((lab > 0).astype(np.float32), (config.ZONE_WINDOW_PX,) * 2)
+    background_rel = np.full(n + 1, np.nan)
+    density = np.full(n + 1, np.nan)
+    if n:
+        background_rel[1:] = ndi.median(rel, lab, ids)
+        density[1:] = ndi.median(dens, lab, ids)
     texture = ring_sd / max(float(noise), 1e-6)
     ev = pd.DataFrame(dict(area_px=area, side_depth=side_depth, elongation=elong, width_px=width,
                            slenderness=sk / np.maximum(width, 1e-9),
-                           hole_density=hole_density, texture=texture), index=np.arange(n + 1))
+                           background_rel=background_rel, density=density, texture=texture),
+                      index=np.arange(n + 1))
     return ev.iloc[1:]
 
 
