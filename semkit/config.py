@@ -195,8 +195,10 @@ ROI_MARGIN_PX = 3
 ROI_MIN_FRACTION = 0.2
 
 # --- ridge detector (semkit.ridge) ---
-#: scales of the dark-ridge response, px (>= 3 px on the image shrunk by 2)
+#: scales of the dark-ridge response, px
 RIDGE_SIGMAS_PX = (1.0, 2.0, 4.0)
+#: scales from this up are computed on the image shrunk by 2, px
+RIDGE_COARSE_SIGMA_PX = 2.0
 #: weight of the edge (gradient) term: the dark side of a step edge is not a line
 RIDGE_EDGE_KAPPA = 1.0
 #: hysteresis levels of the ridge response, in units of its noise response

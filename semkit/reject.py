@@ -52,31 +52,36 @@ RULES = (
 )
 
 
-def _ring_percentile(grey, labels, n, q, width=2):
-    """Per object: the ``q`` percentile of ``grey`` in a ``width``-px ring around it."""
+def _label_percentiles(values, lab, n, qs):
+    """Per label 0..n: the ``qs`` percentiles (lower-nearest rank) and the std of ``values``.
+
+    ``values`` and ``lab`` are 1-D, over the pixels concerned only (sorting them is all)."""
+    out = np.full((len(qs), n + 1), np.nan)
+    sd = np.full(n + 1, np.nan)
+    if lab.size == 0:
+        return out, sd
+    order = np.lexsort((values, lab))
+    lab, val = lab[order], values[order]
+    start = np.searchsorted(lab, np.arange(n + 1), "left")
+    cnt = np.searchsorted(lab, np.arange(n + 1), "right") - start
+    has = cnt > 0
+    for k, q in enumerate(qs):
+        idx = start + np.floor((cnt - 1) * q / 100.0).astype(np.int64)
+        out[k, has] = val[idx[has]]
+    c = np.maximum(cnt, 1)
+    s1 = np.bincount(lab, weights=val, minlength=n + 1)
+    s2 = np.bincount(lab, weights=val.astype(np.float64) ** 2, minlength=n + 1)
+    sd[has] = np.sqrt(np.maximum(s2[has] / c[has] - (s1[has] / c[has]) ** 2, 0.0))
+    return out, sd
+
+
+def _ring(labels, width=2):
+    """``(ring_mask, label_of_ring_pixel)``: pixels within ``width`` of an object, outside all."""
     import cv2
     k = cv2.getStructuringElement(cv2.MORPH_RECT, (2 * width + 1, 2 * width + 1))
     grown = cv2.dilate(labels.astype(np.float32), k).astype(np.int64)
     ring = (labels == 0) & (grown > 0)
-    lab = grown[ring]
-    val = grey[ring]
-    out = np.full(n + 1, np.nan)
-    sd = np.full(n + 1, np.nan)
-    if lab.size == 0:
-        return out, sd
-    order = np.lexsort((val, lab))
-    lab, val = lab[order], val[order]
-    start = np.searchsorted(lab, np.arange(n + 1), "left")
-    stop = np.searchsorted(lab, np.arange(n + 1), "right")
-    cnt = stop - start
-    has = cnt > 0
-    idx = start + np.floor((cnt - 1) * q / 100.0).astype(np.int64)
-    out[has] = val[idx[has]]
-    s1 = np.bincount(lab, weights=val, minlength=n + 1)
-    s2 = np.bincount(lab, weights=val.astype(np.float64) ** 2, minlength=n + 1)
-    c = np.maximum(cnt, 1)
-    sd[has] = np.sqrt(np.maximum(s2[has] / c[has] - (s1[has] / c[has]) ** 2, 0.0))
-    return out, sd
+    return ring, grown[ring]
 
 
 def object_evidence(labels, n, grey, *, crack_level, noise, skeleton=None, region=None):
@@ -104,18 +109,16 @@ def object_evidence(labels, n, grey, *, crack_level, noise, skeleton=None, regio
         density, texture``.
     """
     import cv2
-    from scipy import ndimage as ndi
 
     from .measure import object_moments
     lab = np.asarray(labels)
     g = np.asarray(grey, np.float32)
-    ids = np.arange(1, n + 1)
+    on = lab > 0
+    lab_on = lab[on].astype(np.int64)
     # the object's dark core: its 20th percentile (a thin crack is mostly partial-volume rim)
-    core = np.full(n + 1, np.nan)
-    if n:
-        core[1:] = ndi.labeled_comprehension(g, lab, ids, lambda v: np.percentile(v, 20),
-                                             np.float64, np.nan)
-    ring_lo, ring_sd = _ring_percentile(g, lab, n, 25.0)
+    core = _label_percentiles(g[on], lab_on, n, (20.0,))[0][0]
+    ring, ring_lab = _ring(lab)
+    (ring_lo,), ring_sd = _label_percentiles(g[ring], ring_lab, n, (25.0,))
     side_depth = (ring_lo - core) / np.maximum(ring_lo - float(crack_level), 1e-3)
     area, _, _, mxx, myy, mxy, _, _ = object_moments(lab, n)
     half = 0.5 * (mxx + myy)
@@ -133,11 +136,8 @@ def object_evidence(labels, n, grey, *, crack_level, noise, skeleton=None, regio
     ref = float(np.percentile(inside, 75)) if inside.size else float(bg.max())
     rel = (bg - float(crack_level)) / max(ref - float(crack_level), 1e-3)
     dens = cv2.blur((lab > 0).astype(np.float32), (config.ZONE_WINDOW_PX,) * 2)
-    background_rel = np.full(n + 1, np.nan)
-    density = np.full(n + 1, np.nan)
-    if n:
-        background_rel[1:] = ndi.median(rel, lab, ids)
-        density[1:] = ndi.median(dens, lab, ids)
+    background_rel = _label_percentiles(rel[on], lab_on, n, (50.0,))[0][0]
+    density = _label_percentiles(dens[on], lab_on, n, (50.0,))[0][0]
     texture = ring_sd / max(float(noise), 1e-6)
     ev = pd.DataFrame(dict(area_px=area, side_depth=side_depth, elongation=elong, width_px=width,
                            slenderness=sk / np.maximum(width, 1e-9),

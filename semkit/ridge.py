@@ -8,9 +8,10 @@ line l1 > 0 and along it l2 ~ 0. The response is
 
 the scale-normalised valley strength, less a blob term (|l2|: a round dark spot has l1 ~ l2) and
 an edge term (the dark side of a step edge has l1 > 0 too, but a large gradient, while the
-centre of a line has none). R is the maximum over scales. Fine scales run on the full image,
-coarse ones (sigma >= 3 px) on the image shrunk by 2 and are resized back: far cheaper than
-scikit-image's ``sato`` / ``frangi`` (which compute every scale at full size, in float64).
+centre of a line has none). R is the maximum over scales. The finest scale runs on the full
+image, coarser ones (sigma >= ``RIDGE_COARSE_SIGMA_PX``) on the image shrunk by 2 and are
+resized back; the eigenvalues are one numba pass (:func:`semkit._kernels.ridge_strength`):
+far cheaper than scikit-image's ``sato`` / ``frangi`` (every scale at full size, float64).
 
 :func:`ridge_mask` turns R into crack candidates by hysteresis on its signal-to-noise ratio
 (the noise response measured on the image's own Laplacian) and keeps only lines whose grey
@@ -26,21 +27,22 @@ from . import config
 __all__ = ["ridge_response", "ridge_mask"]
 
 
-def _hessian_response(img, sigma, kappa):
+def _add_scale(img, sigma, kappa, out):
+    """Max ``out`` with the ridge strength at ``sigma``; returns the scale-normalised
+    Laplacian (for the noise level)."""
     import cv2
-    g = cv2.GaussianBlur(img, (0, 0), sigma, borderType=cv2.BORDER_REFLECT)
-    dxx = cv2.Sobel(g, cv2.CV_32F, 2, 0, ksize=3, borderType=cv2.BORDER_REFLECT) / 4.0
-    dyy = cv2.Sobel(g, cv2.CV_32F, 0, 2, ksize=3, borderType=cv2.BORDER_REFLECT) / 4.0
-    dxy = cv2.Sobel(g, cv2.CV_32F, 1, 1, ksize=3, borderType=cv2.BORDER_REFLECT) / 4.0
-    gx = cv2.Sobel(g, cv2.CV_32F, 1, 0, ksize=3, borderType=cv2.BORDER_REFLECT) / 8.0
-    gy = cv2.Sobel(g, cv2.CV_32F, 0, 1, ksize=3, borderType=cv2.BORDER_REFLECT) / 8.0
-    half_tr = 0.5 * (dxx + dyy)
-    disc = np.sqrt(0.25 * (dxx - dyy) ** 2 + dxy * dxy)
-    l1 = half_tr + disc
-    l2 = half_tr - disc
-    r = sigma * sigma * (l1 - np.abs(l2)) - kappa * sigma * np.sqrt(gx * gx + gy * gy)
-    lap = sigma * sigma * (dxx + dyy)
-    return np.maximum(r, 0.0), lap
+
+    from . import _kernels
+    b = cv2.BORDER_REFLECT
+    g = cv2.GaussianBlur(img, (0, 0), sigma, borderType=b)
+    dxx = cv2.Sobel(g, cv2.CV_32F, 2, 0, ksize=3, scale=0.25, borderType=b)
+    dyy = cv2.Sobel(g, cv2.CV_32F, 0, 2, ksize=3, scale=0.25, borderType=b)
+    dxy = cv2.Sobel(g, cv2.CV_32F, 1, 1, ksize=3, scale=0.25, borderType=b)
+    gx = cv2.Sobel(g, cv2.CV_32F, 1, 0, ksize=3, scale=0.125, borderType=b)
+    gy = cv2.Sobel(g, cv2.CV_32F, 0, 1, ksize=3, scale=0.125, borderType=b)
+    _kernels.ridge_strength(dxx, dyy, dxy, gx, gy, float(sigma * sigma), float(kappa * sigma),
+                            out)
+    return dxx, dyy
 
 
 def ridge_response(image, *, sigmas=config.RIDGE_SIGMAS_PX, kappa=config.RIDGE_EDGE_KAPPA):
@@ -51,7 +53,7 @@ def ridge_response(image, *, sigmas=config.RIDGE_SIGMAS_PX, kappa=config.RIDGE_E
     image : (M, N) ndarray
         Grey image (flattened, denoised), cracks dark.
     sigmas : sequence of float
-        Scales, px; those >= 3 px are computed on the image shrunk by 2.
+        Scales, px; those >= ``RIDGE_COARSE_SIGMA_PX`` are computed on the image shrunk by 2.
     kappa : float
         Weight of the edge (gradient) term.
 
@@ -74,20 +76,20 @@ def ridge_response(image, *, sigmas=config.RIDGE_SIGMAS_PX, kappa=config.RIDGE_E
     a = np.ascontiguousarray(image, np.float32)
     h, w = a.shape
     out = np.zeros(a.shape, np.float32)
+    small = np.ascontiguousarray(cv2.resize(a, (w // 2, h // 2), interpolation=cv2.INTER_AREA)) \
+        if min(h, w) >= 32 and max(sigmas) >= config.RIDGE_COARSE_SIGMA_PX else None
+    out_small = None if small is None else np.zeros(small.shape, np.float32)
     noise = None
-    small = None
     for s in sorted(sigmas):
-        if s >= 3.0 and min(h, w) >= 32:
-            if small is None:
-                small = cv2.resize(a, (w // 2, h // 2), interpolation=cv2.INTER_AREA)
-            r, _ = _hessian_response(small, s / 2.0, kappa)
-            r = cv2.resize(r, (w, h), interpolation=cv2.INTER_LINEAR)
+        if small is not None and s >= config.RIDGE_COARSE_SIGMA_PX:
+            _add_scale(small, s / 2.0, kappa, out_small)
         else:
-            r, lap = _hessian_response(a, s, kappa)
+            dxx, dyy = _add_scale(a, s, kappa, out)
             if noise is None:
-                v = lap[::2, ::2].ravel()
+                v = (s * s * (dxx + dyy))[::2, ::2].ravel()
                 noise = float(1.4826 * np.median(np.abs(v - np.median(v))))
-        np.maximum(out, r, out=out)
+    if out_small is not None:
+        np.maximum(out, cv2.resize(out_small, (w, h), interpolation=cv2.INTER_LINEAR), out=out)
     return out, max(noise or 0.0, 1e-6)
 
 
