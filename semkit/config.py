@@ -231,11 +231,13 @@ REJECT_DARK_BACKGROUND = 0.4
 #: window around the object detected
 REJECT_MOTTLED_BACKGROUND = 0.8
 REJECT_MOTTLED_DENSITY = 0.15
-#: ... and less elongated than this (principal-moment ratio; a crack with debris is more)
-REJECT_MOTTLED_MAX_ELONGATION = 5.0
+#: ... and with at least this many other objects centred in the window around it
+REJECT_MOTTLED_NEIGHBOURS = 4
 #: ... unless the object's core reaches this share of the crack contrast (an open crack)
 REJECT_ZONE_MAX_DEPTH = 0.85
 #: side of the grey closing giving an object's local background (fills cracks narrower), px
 ZONE_CLOSING_PX = 21
 #: side of the window of the detection density, px
 ZONE_WINDOW_PX = 41
+#: side of the window in which neighbouring objects are counted, px
+ZONE_NEIGHBOUR_WINDOW_PX = 81

@@ -15,8 +15,10 @@ Every cleaned object gets a few measures (:func:`object_evidence`):
   both measured from the crack core grey: ~1 for a crack in a clear grain, low inside a dark
   phase (biotite, opaque minerals), lowered in a mottled, altered grain.
 * ``density`` — the object's median share of detected pixels in a 41 x 41 window around it: a
-  mottled area is riddled with dark specks and squiggles, a crack is one line in clear rock
-  (a mottled object is also sprawling or blotchy, not elongated like a crack with its debris).
+  mottled area is riddled with dark specks and squiggles, a crack is one line in clear rock.
+* ``neighbours`` — other objects (>= 5 px) centred in the 81 x 81 window around the object's
+  centre: a mottled area is many separate specks, a crack network (even with its debris) is
+  one object with few around it.
 * ``texture`` — grey standard deviation of the ring in noise sigmas (reported, not a rule).
 
 An object whose dark core reaches the crack core grey (``side_depth`` at least
@@ -47,7 +49,7 @@ RULES = (
      & (e.side_depth < config.REJECT_ZONE_MAX_DEPTH)),
     ("mottled", lambda e: (e.background_rel < config.REJECT_MOTTLED_BACKGROUND)
      & (e.density >= config.REJECT_MOTTLED_DENSITY)
-     & (e.elongation < config.REJECT_MOTTLED_MAX_ELONGATION)
+     & (e.neighbours >= config.REJECT_MOTTLED_NEIGHBOURS)
      & (e.side_depth < config.REJECT_ZONE_MAX_DEPTH)),
 )
 
@@ -106,7 +108,7 @@ def object_evidence(labels, n, grey, *, crack_level, noise, skeleton=None, regio
     -------
     evidence : pandas.DataFrame
         Index 1..n: ``area_px, side_depth, elongation, width_px, slenderness, background_rel,
-        density, texture``.
+        density, neighbours, texture``.
     """
     import cv2
 
@@ -120,7 +122,7 @@ def object_evidence(labels, n, grey, *, crack_level, noise, skeleton=None, regio
     ring, ring_lab = _ring(lab)
     (ring_lo,), ring_sd = _label_percentiles(g[ring], ring_lab, n, (25.0,))
     side_depth = (ring_lo - core) / np.maximum(ring_lo - float(crack_level), 1e-3)
-    area, _, _, mxx, myy, mxy, _, _ = object_moments(lab, n)
+    area, cx, cy, mxx, myy, mxy, _, _ = object_moments(lab, n)
     half = 0.5 * (mxx + myy)
     disc = np.sqrt(0.25 * (mxx - myy) ** 2 + mxy ** 2)
     elong = np.sqrt(np.maximum(half + disc, 1e-9) / np.maximum(half - disc, 1e-2))
@@ -138,10 +140,21 @@ def object_evidence(labels, n, grey, *, crack_level, noise, skeleton=None, regio
     dens = cv2.blur((lab > 0).astype(np.float32), (config.ZONE_WINDOW_PX,) * 2)
     background_rel = _label_percentiles(rel[on], lab_on, n, (50.0,))[0][0]
     density = _label_percentiles(dens[on], lab_on, n, (50.0,))[0][0]
+    # other objects (>= 5 px) whose centre lies in the window around this one's centre
+    counts = np.zeros(lab.shape, np.float32)
+    big = np.flatnonzero(area[1:] >= 5) + 1
+    ri = np.clip(np.rint(cy[big]).astype(int), 0, lab.shape[0] - 1)
+    ci = np.clip(np.rint(cx[big]).astype(int), 0, lab.shape[1] - 1)
+    np.add.at(counts, (ri, ci), 1.0)
+    w = config.ZONE_NEIGHBOUR_WINDOW_PX
+    counts = cv2.boxFilter(counts, -1, (w, w), normalize=False, borderType=cv2.BORDER_CONSTANT)
+    neighbours = counts[np.clip(np.rint(cy).astype(int), 0, lab.shape[0] - 1),
+                        np.clip(np.rint(cx).astype(int), 0, lab.shape[1] - 1)] - (area >= 5)
     texture = ring_sd / max(float(noise), 1e-6)
     ev = pd.DataFrame(dict(area_px=area, side_depth=side_depth, elongation=elong, width_px=width,
                            slenderness=sk / np.maximum(width, 1e-9),
-                           background_rel=background_rel, density=density, texture=texture),
+                           background_rel=background_rel, density=density,
+                           neighbours=neighbours, texture=texture),
                       index=np.arange(n + 1))
     return ev.iloc[1:]
 

@@ -87,13 +87,14 @@ def analyse_file(path, *, manifest_row=None, pixel_size_um=None, overlay_dir=Non
         The per-grain table (with grains).
     """
     path = pathlib.Path(path)
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     try:
         a = open_analysis(path, manifest_row=manifest_row, pixel_size_um=pixel_size_um,
                           options=options, seed=seed)
         cracks = a.crack_rows()
         row = a.summary()
         row["seconds"] = time.perf_counter() - t0
+        row["cpu_seconds"] = time.process_time() - c0
         if overlay_dir is not None:
             from .plot import overlay_cracks
             o = a.objects
