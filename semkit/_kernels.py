@@ -428,6 +428,36 @@ def fill_background(img, known, rows, cols, n_rings, band, out):
 
 
 @njit
+def ridge_strength(dxx, dyy, dxy, gx, gy, s2, ks, out):
+    """Dark-ridge strength from Hessian and gradient images, maxed into ``out`` in place.
+
+    Parameters
+    ----------
+    dxx, dyy, dxy, gx, gy : (M, N) float32
+        Second and first derivatives of the Gaussian-smoothed image.
+    s2 : float
+        sigma^2 (scale normalisation of the Hessian term).
+    ks : float
+        kappa * sigma (weight of the gradient term).
+    out : (M, N) float32
+        Running maximum over scales; ``max(out, s2 (l1 - |l2|) - ks |grad|, 0)`` is written.
+    """
+    h, w = dxx.shape
+    for i in range(h):
+        for j in range(w):
+            a = dxx[i, j]
+            b = dyy[i, j]
+            c = dxy[i, j]
+            half = 0.5 * (a + b)
+            disc = math.sqrt(0.25 * (a - b) * (a - b) + c * c)
+            l2 = half - disc
+            r = s2 * (half + disc - abs(l2)) - ks * math.sqrt(gx[i, j] * gx[i, j]
+                                                               + gy[i, j] * gy[i, j])
+            if r > out[i, j]:
+                out[i, j] = r
+
+
+@njit
 def skeleton_window_sums(skel, aperture, mask, ends, dark, rr, cc, half, out):
     """Sums over the (2 half + 1)^2 box around each skeleton pixel, written in place.
 

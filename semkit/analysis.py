@@ -24,9 +24,11 @@ IMAGE_COLUMNS = ["image", "pixel_size_um", "pixel_size_source", "threshold_metho
                  "threshold_value", "n_cracks", "crack_area_um2", "crack_length_um",
                  "area_T_um2", "area_S_um2", "P", "seconds"]
 #: images.csv columns after :data:`IMAGE_COLUMNS`.
-EXTRA_IMAGE_COLUMNS = ["image_area_um2", "crack_area_fraction", "crack_density_per_mm",
-                       "threshold_ok", "threshold_note", "n_thin", "n_pores", "pore_area_um2",
-                       "width_px", "height_px", "flatten", "despeckle", "error"]
+EXTRA_IMAGE_COLUMNS = ["valid", "valid_note", "image_area_um2", "crack_area_fraction",
+                       "crack_density_per_mm", "threshold_ok", "threshold_note", "roi",
+                       "roi_fraction", "roi_ok", "data_bar_rows", "pixel_size_note", "n_thin",
+                       "n_rejected", "n_pores", "pore_area_um2", "width_px", "height_px", "flatten",
+                       "despeckle", "error"]
 #: manifest stages of a loaded specimen (post-test cracks: tensile / shear typing applies).
 LOADED_STAGES = tuple(s for s in config.STAGE_ORDER if s != "pre-test")
 
@@ -76,21 +78,75 @@ class CrackAnalysis:
             raise InputError(f"{name or 'image'}: image holds NaN or inf")
         if not pixel_size_um > 0:
             raise InputError(f"pixel_size_um: expected > 0, got {pixel_size_um}")
-        self.image = img
+        self.options = options or AnalysisOptions()
+        self.raw_image = img
         self.pixel_size_um = float(pixel_size_um)
         self.pixel_size_source = pixel_size_source
+        self.pixel_size_note = ""
         self.name = name
-        self.options = options or AnalysisOptions()
         self.stage = _stage_name(stage)
         self.seed = seed
+        self.data_bar = self.scale_bar = None
+        if self.options.roi == "auto":
+            self._crop_data_bar()
+        else:
+            self.image = img
+
+    # stage 1b: SEM data bar (cropped) and its scale bar
+    def _crop_data_bar(self):
+        from .databar import find_data_bar, read_scale_bar
+        img = self.raw_image
+        bar = find_data_bar(img)
+        self.image = img
+        if bar is None:
+            return
+        self.data_bar = bar
+        self.image = np.ascontiguousarray(img[bar.row1:] if bar.side == "top" else img[:bar.row0])
+        sb = read_scale_bar(img, bar)
+        self.scale_bar = sb
+        if sb is None or not np.isfinite(sb.length_um):
+            if sb is not None:
+                self.pixel_size_note = f"scale bar label unreadable ({sb.text!r})"
+            return
+        px = sb.pixel_size_um
+        if self.pixel_size_source == "default":
+            self.pixel_size_um, self.pixel_size_source = px, "scale_bar"
+        elif abs(px / self.pixel_size_um - 1) > config.SCALEBAR_AGREE_FRACTION:
+            self.pixel_size_note = (f"scale bar ({sb.text.strip()} over {sb.length_px:.0f} px) "
+                                    f"gives {px:.4g} um/px, not {self.pixel_size_um:.4g}")
+
+    # stage 1c: sample region
+    @functools.cached_property
+    def region(self):
+        """The sample region (:class:`semkit.roi.SampleRegion`) of ``image``."""
+        from .roi import SampleRegion, find_sample_region, read_roi_mask
+        roi = self.options.roi
+        if roi == "none":
+            return SampleRegion(np.ones(self.image.shape, bool), "none", 1.0)
+        if roi != "auto":
+            return read_roi_mask(roi, self.image.shape)
+        return find_sample_region(self.image)
+
+    @functools.cached_property
+    def _work_image(self):
+        """``image`` with the pixels outside the sample region filled (see :mod:`semkit.roi`)."""
+        from .roi import fill_outside
+        r = self.region
+        if r.fraction >= 1.0:
+            return self.image
+        out = fill_outside(self.image, r.mask)
+        if self.image.dtype.kind in "ui":  # same dtype: a segmenter scales by the dtype range
+            out = np.rint(out).astype(self.image.dtype)
+        return out
 
     # stage 2
     @functools.cached_property
     def _flat_field(self):
         from .illumination import flatten_illumination
+        img = self._work_image
         if self.options.flatten == "none":
-            return self.image.astype(np.float32), np.ones(self.image.shape, np.float32)
-        return flatten_illumination(self.image, method=self.options.flatten)
+            return img.astype(np.float32), np.ones(img.shape, np.float32)
+        return flatten_illumination(img, method=self.options.flatten)
 
     @property
     def flat(self):
@@ -114,12 +170,48 @@ class CrackAnalysis:
             raise InputError(f"{self.name or 'image'}: image is uniform (no contrast)")
         return crack_mask(img, method=self.options.threshold)
 
+    @functools.cached_property
+    def ridge(self):
+        """``(mask, depth)`` of thin dark lines (:func:`semkit.ridge.ridge_mask`), or None
+        when the ridge detector is off or the threshold found no crack grey."""
+        t = self.thresholded
+        if not self.options.ridge or t.method != "auto" or not np.isfinite(t.crack_level):
+            return None
+        from .ridge import ridge_mask
+        return ridge_mask(self.smooth, crack_level=t.crack_level, region=self.region.mask)
+
+    @functools.cached_property
+    def detection(self):
+        """``(detect_mask, area_mask)`` before cleaning: the threshold fused with the ridge
+        lines, or the segmenter's decision when one is given; nothing outside the region."""
+        seg = self.options.segmenter
+        if seg is not None:
+            p = seg.crack_probability(self._work_image)
+            det = area = np.asarray(p) >= seg.threshold
+        else:
+            t = self.thresholded
+            det, area = t.detect_mask, t.mask
+            if self.ridge is not None:
+                # ridge lines add cracks the threshold missed; lines touching a threshold
+                # object are left out, so the threshold's objects keep their shape
+                import cv2
+                rm, depth = self.ridge
+                n, lab = cv2.connectedComponents(rm.view(np.uint8), connectivity=8)
+                near = cv2.dilate(det.view(np.uint8), np.ones((3, 3), np.uint8)).view(bool)
+                touch = np.zeros(n, bool)
+                touch[lab[near & rm]] = True
+                touch[0] = True
+                new = ~touch[lab]
+                det = det | new
+                area = area | (new & (depth >= config.AUTO_AREA_FRACTION))
+        inside = self.region.mask
+        return det & inside, area & inside
+
     # stage 4
     @functools.cached_property
     def _masks(self):
         from . import cleanup
-        t = self.thresholded
-        det, area = t.detect_mask, t.mask
+        det, area = self.detection
         if self.options.despeckle == "median":  # ImageJ: one binary, then a 3 x 3 median
             det = area = cleanup.despeckle_median(area)
         elif self.options.despeckle == "specks":
@@ -131,7 +223,8 @@ class CrackAnalysis:
             det = cleanup.bridge_gaps(det)
         filled = cleanup.fill_holes(det, max_hole_px=self.options.max_hole_px)
         area = (area & det) | (filled & ~det)
-        return filled, area
+        inside = self.region.mask
+        return filled & inside, area & inside
 
     @property
     def object_mask(self):
@@ -167,9 +260,9 @@ class CrackAnalysis:
         t = crack_table(self.labels, self.n_objects, pixel_size_um=self.pixel_size_um,
                         skeleton=self.skeleton if self.options.length else None,
                         area_mask=self.area_mask, image_name=self.name)
-        th = self.thresholded
         t["area_method"] = "count"
-        if th.background is not None and t["thin"].any():
+        th = None if self.options.segmenter is not None else self.thresholded
+        if th is not None and th.background is not None and t["thin"].any():
             # thin cracks never reach the midpoint: their area is their partial volume
             thin = t["thin"].to_numpy()
             ids = t["crack_id"].to_numpy()[thin]
@@ -185,9 +278,56 @@ class CrackAnalysis:
         return t
 
     @functools.cached_property
+    def crack_level(self):
+        """Crack core grey (the ``auto`` threshold's, else the dark-class analysis's)."""
+        t = None if self.options.segmenter is not None else self.thresholded
+        if t is not None and np.isfinite(t.crack_level):
+            return float(t.crack_level)
+        from .threshold import dark_class_levels
+        lv = dark_class_levels(self.smooth)
+        return float(lv.crack) if np.isfinite(lv.crack) else float(np.percentile(
+            self.smooth[self.region.mask], config.DARKEST_PERCENT))
+
+    @functools.cached_property
+    def evidence(self):
+        """Shape and surroundings of every object (:func:`semkit.reject.object_evidence`)."""
+        from .reject import object_evidence
+        from .threshold import noise_sigma
+        return object_evidence(self.labels, self.n_objects, self.smooth,
+                               crack_level=self.crack_level, noise=noise_sigma(self.smooth),
+                               skeleton=self.skeleton if self.options.length else None,
+                               region=self.region.mask)
+
+    @functools.cached_property
+    def rejected_as(self):
+        """Per object (index = label): why it is not a crack, ``""`` when it is one."""
+        if not self.options.reject or self.n_objects == 0:
+            return pd.Series("", index=np.arange(1, self.n_objects + 1), dtype=object)
+        from .reject import reject_objects
+        return reject_objects(self.evidence)
+
+    @functools.cached_property
+    def _classified_objects(self):
+        o = self.objects.copy()
+        o["rejected_as"] = self.rejected_as.reindex(o["crack_id"]).fillna("").to_numpy()
+        if self.options.exclude_pores:
+            o.loc[o["is_pore"].to_numpy(bool), "rejected_as"] = ""
+        return o
+
+    @functools.cached_property
     def cracks(self):
-        o = self.objects
-        return o[~o["is_pore"]].reset_index(drop=True) if self.options.exclude_pores else o
+        """Objects that are cracks: no pore (with ``exclude_pores``), nothing rejected."""
+        o = self._classified_objects
+        keep = o["rejected_as"] == ""
+        if self.options.exclude_pores:
+            keep &= ~o["is_pore"]
+        return o[keep].reset_index(drop=True)
+
+    @functools.cached_property
+    def rejected(self):
+        """Objects rejected as not cracks, with ``rejected_as`` (see :mod:`semkit.reject`)."""
+        o = self._classified_objects
+        return o[o["rejected_as"] != ""].reset_index(drop=True)
 
     @functools.cached_property
     def crack_labels(self):
@@ -204,17 +344,21 @@ class CrackAnalysis:
             return None
         from .grains import grains_stage, parse_minerals
         names, n = parse_minerals(self.options.minerals)
-        lab, ph, g = grains_stage(self.flat, mask=self.object_mask,
+        lab, ph, g = grains_stage(self.flat, mask=self.object_mask | ~self.region.mask,
                                   pixel_size_um=self.pixel_size_um, names=names, n_phases=n,
-                                  seed=self.seed, alt_image=self.image)
+                                  seed=self.seed, alt_image=self._work_image)
         g.insert(0, "image", self.name)
         return lab, ph, g
 
     # stage 7: crack types
     @property
     def typing_post(self):
-        """True when this image's cracks are typed tensile / shear / mixed."""
-        return bool(self.options.classify) and self.stage != "pre-test"
+        """True when this image's cracks are typed tensile / shear / mixed (see
+        :attr:`AnalysisOptions.classify`: by default only on loaded stages of the manifest)."""
+        c = self.options.classify
+        if c is None:
+            return self.stage in LOADED_STAGES
+        return bool(c) and self.stage != "pre-test"
 
     @functools.cached_property
     def typed_cracks(self):
@@ -228,9 +372,27 @@ class CrackAnalysis:
                               post=self.typing_post,
                               grain_labels=None if self.grain_map is None else self.grain_map[0])
 
+    def full_size(self, a):
+        """``a`` (an array of ``image``'s shape) padded back to the raw image's shape: the
+        cropped data bar rows are 0."""
+        bar = self.data_bar
+        if bar is None:
+            return a
+        out = np.zeros(self.raw_image.shape, a.dtype)
+        if bar.side == "top":
+            out[bar.row1:] = a
+        else:
+            out[:bar.row0] = a
+        return out
+
     def crack_rows(self) -> pd.DataFrame:
-        """The rows this image contributes to ``cracks.csv``."""
-        return self.typed_cracks
+        """The rows this image contributes to ``cracks.csv``: the cracks, then the rejected
+        objects (``rejected_as`` says why; they count in no sum)."""
+        rej = self.rejected
+        if not len(rej):
+            return self.typed_cracks
+        rej = rej.assign(type_post="unknown", type_pre="unknown", confidence=np.nan)
+        return pd.concat([self.typed_cracks, rej], ignore_index=True)
 
     def _damage_fields(self):
         nan = float("nan")
@@ -255,25 +417,52 @@ class CrackAnalysis:
         """
         c = self.cracks
         o = self.objects
-        pores = o[o["is_pore"]] if self.options.exclude_pores else o.iloc[:0]
-        t = self.thresholded
+        pores = o[o["is_pore"] & (self._classified_objects["rejected_as"] == "")] \
+            if self.options.exclude_pores else o.iloc[:0]
         area = float(c["area_um2"].sum())
-        image_area = float(self.image.size) * self.pixel_size_um ** 2
+        reg = self.region
+        image_area = float(reg.mask.sum()) * self.pixel_size_um ** 2
         nan = float("nan")
         length = float(c["length_um"].sum()) if self.options.length else nan
         row = dict(image=self.name, pixel_size_um=self.pixel_size_um,
-                   pixel_size_source=self.pixel_size_source, threshold_method=t.method,
-                   threshold_value=t.value, n_cracks=int(len(c)), crack_area_um2=area,
+                   pixel_size_source=self.pixel_size_source, **self._threshold_fields(),
+                   n_cracks=int(len(c)), crack_area_um2=area,
                    crack_length_um=length, area_T_um2=nan, area_S_um2=nan, P=nan, seconds=nan,
                    image_area_um2=image_area, crack_area_fraction=area / image_area,
                    crack_density_per_mm=length / image_area * 1e3,
-                   threshold_ok=bool(t.ok), threshold_note=t.note,
                    n_thin=int(c["thin"].sum()), n_pores=int(len(pores)),
+                   n_rejected=int(len(self.rejected)),
                    pore_area_um2=float(pores["area_um2"].sum()),
                    width_px=int(self.image.shape[1]), height_px=int(self.image.shape[0]),
                    flatten=self.options.flatten, despeckle=self.options.despeckle, error="")
+        bar = self.data_bar
+        row.update(roi=reg.kind, roi_fraction=reg.fraction, roi_ok=reg.ok,
+                   data_bar_rows=f"{bar.row0}-{bar.row1}" if bar else "",
+                   pixel_size_note=self.pixel_size_note)
         row.update(self._damage_fields())
+        row.update(self._validity(row))
         return row
+
+    def _threshold_fields(self):
+        seg = self.options.segmenter
+        if seg is not None:
+            return dict(threshold_method="segmenter", threshold_value=float(seg.threshold),
+                        threshold_ok=True, threshold_note="")
+        t = self.thresholded
+        return dict(threshold_method=t.method, threshold_value=t.value, threshold_ok=bool(t.ok),
+                    threshold_note=t.note)
+
+    def _validity(self, row):
+        """``valid`` and ``valid_note``: False with the reasons when a number of the row is
+        not to be trusted (threshold check failed, sample region too small, ...)."""
+        notes = []
+        if not row["threshold_ok"]:
+            notes.append(f"threshold: {row['threshold_note']}")
+        if not row["roi_ok"]:
+            notes.append(f"roi: {self.region.note}")
+        if row["pixel_size_note"]:
+            notes.append(f"pixel size: {row['pixel_size_note']}")
+        return dict(valid=not notes, valid_note="; ".join(notes))
 
 
 def analyse_image(image, *, pixel_size_um=config.DEFAULT_PIXEL_SIZE_UM, name="",

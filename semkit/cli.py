@@ -17,7 +17,7 @@ __all__ = ["main", "build_parser"]
 _ANALYSE_KEYS = ("threshold", "flatten", "denoise_sigma_px", "despeckle", "min_area_um2",
                  "max_hole_px", "length", "exclude_pores", "pixel_size_um", "jobs", "progress",
                  "overlays", "classify", "crack_model", "grains", "minerals", "classes",
-                 "labels")
+                 "labels", "roi", "ridge", "reject", "save_masks", "segmenter")
 
 
 def _version():
@@ -62,6 +62,20 @@ def _add_analyse(sub):
                    help="no progress bar")
     p.add_argument("--config", metavar="FILE.yaml", help="options from YAML (flags win)")
     # crack types, P, grains (docs/semkit_science.md)
+    p.add_argument("--roi", default=None, metavar="auto|none|MASK.png",
+                   help="sample region: auto (default: crop the SEM data bar, drop a black or "
+                        "white surround), none, or a mask image (non-zero = sample)")
+    p.add_argument("--no-ridge", dest="ridge", action="store_false", default=None,
+                   help="threshold only (no ridge detector for thin, faint cracks)")
+    p.add_argument("--no-reject", dest="reject", action="store_false", default=None,
+                   help="keep dark objects the shape and surroundings rules would reject")
+    p.add_argument("--save-masks", dest="save_masks", action="store_true", default=None,
+                   help="write masks/<stem>_cracks.png (0/255) and masks/<stem>_labels.png")
+    p.add_argument("--segmenter", default=None, metavar="SEG.skops",
+                   help="trained pixel classifier used instead of threshold and ridge")
+    p.add_argument("--classify", dest="classify", action="store_true", default=None,
+                   help="type tensile/shear/mixed on every image (default: only on loaded "
+                        "stages of manifest.csv)")
     p.add_argument("--no-classify", dest="classify", action="store_false", default=None,
                    help="skip tensile/shear/mixed typing (then no P)")
     p.add_argument("--crack-model", default=None, metavar="MODEL.json",
@@ -129,10 +143,17 @@ def _run_analyse(args):
     if kw.get("labels") is not None:
         from .classify import read_labels
         kw["labels"] = read_labels(kw["labels"])
+    if kw.get("segmenter") is not None:
+        from .segmenter_file import load_segmenter
+        kw["segmenter"] = load_segmenter(kw["segmenter"])
     if kw.get("classes") is not None:
         from .grains import parse_classes
         parse_classes(kw["classes"])
     images, _ = analyse_folder(args.folder, args.out, **kw)
+    skipped = images.attrs.get("skipped", [])
+    if skipped:
+        print(f"semkit: skipped {len(skipped)} non-image file(s): {', '.join(skipped)}",
+              file=sys.stderr)
     failed = images["error"].fillna("").astype(str).str.len() > 0
     n_fail = int(failed.sum())
     if n_fail:

@@ -35,14 +35,28 @@ class AnalysisOptions:
     bridge_gaps : bool
         Close 1-px gaps along thin cracks (3 x 3 closing) so a 1-px crack whose blurred core
         dips under the detection level stays one object.
-    classify : bool
-        Post-test typing (tensile / shear / mixed), ``type_post``, ``confidence``, P.
+    classify : bool or None
+        Post-test typing (tensile / shear / mixed), ``type_post``, ``confidence``, P. None
+        (default): only images whose ``manifest.csv`` stage is a loaded one (initiating,
+        propagation, failure); True: every image not marked pre-test; False: none.
     crack_model : str or None
         JSON model from ``semkit classify --train`` (default: the built-in one).
     grains : bool
         Mineral phases, grains, ``type_pre`` and ``grains.csv``.
     minerals : str or None
         Mineral names brightest-first (``"a,b,c"``) or a number of phases.
+    ridge : bool
+        Fuse the ``auto`` threshold with the multi-scale ridge detector (thin, faint cracks;
+        :mod:`semkit.ridge`).
+    reject : bool
+        Reject dark objects that are not cracks by shape and surroundings
+        (:mod:`semkit.reject`); they stay in ``cracks.csv`` with ``rejected_as``.
+    segmenter : object or None
+        A trained pixel classifier (``crack_probability(grey) -> P(crack)`` and ``threshold``,
+        e.g. from ``semkit.segmenter.load_segmenter``) used instead of threshold and ridge.
+    roi : str
+        Sample region: ``auto`` (data bar cropped, black / white surround removed), ``none``
+        (whole image) or the path of a mask image (non-zero = sample); see :mod:`semkit.roi`.
     """
 
     threshold: str = "auto"
@@ -54,15 +68,21 @@ class AnalysisOptions:
     length: bool = True
     exclude_pores: bool = True
     bridge_gaps: bool = True
-    classify: bool = True
+    classify: bool | None = None
     crack_model: str | None = None
     grains: bool = False
     minerals: str | None = None
+    roi: str = "auto"
+    ridge: bool = True
+    reject: bool = True
+    segmenter: object = None
 
     def __post_init__(self):
         from .classify import load_model
         from .grains import parse_minerals
+        from .roi import parse_roi
         from .threshold import parse_method
+        parse_roi(self.roi)
         parse_method(self.threshold)
         if self.crack_model is not None:
             load_model(self.crack_model)
@@ -77,3 +97,8 @@ class AnalysisOptions:
             raise InputError(f"denoise_sigma_px: expected >= 0, got {self.denoise_sigma_px}")
         if self.min_area_um2 is not None and not self.min_area_um2 >= 0:
             raise InputError(f"min_area_um2: expected >= 0, got {self.min_area_um2}")
+        seg = self.segmenter
+        if seg is not None and not (callable(getattr(seg, "crack_probability", None))
+                                    and hasattr(seg, "threshold")):
+            raise InputError("segmenter: expected an object with crack_probability(grey) and "
+                             "threshold")

@@ -75,7 +75,10 @@ def write_science_outputs(out, images, cracks, *, manifest=None, labels=None, gr
         from .classify import apply_labels
         cracks = apply_labels(cracks, labels)
         if "frac_tensile" in cracks.columns:
-            d = image_damage(cracks[cracks["image"].isin(labels["image"])]).set_index("image")
+            kept = cracks["rejected_as"].fillna("").astype(str) == "" \
+                if "rejected_as" in cracks.columns else True
+            d = image_damage(cracks[kept & cracks["image"].isin(labels["image"])]
+                             ).set_index("image")
             images = images.copy()
             for name, r in d.iterrows():
                 sel = images["image"] == name

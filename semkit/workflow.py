@@ -21,7 +21,7 @@ import pandas as pd
 
 from .analysis import EXTRA_IMAGE_COLUMNS, IMAGE_COLUMNS, CrackAnalysis
 from .errors import InputError
-from .io import list_images, load_image, read_manifest, write_image
+from .io import list_folder, load_image, read_manifest, write_image
 from .options import AnalysisOptions
 from .outputs import write_science_outputs, write_tables
 
@@ -62,7 +62,7 @@ def _failed_row(name, error, seconds):
 
 
 def analyse_file(path, *, manifest_row=None, pixel_size_um=None, overlay_dir=None,
-                 grain_map_dir=None, options=None, seed=None):
+                 grain_map_dir=None, mask_dir=None, options=None, seed=None):
     """Analyse one image file; never raises for a bad image (the error goes in the row).
 
     Parameters
@@ -72,6 +72,8 @@ def analyse_file(path, *, manifest_row=None, pixel_size_um=None, overlay_dir=Non
     pixel_size_um : float, optional
     overlay_dir, grain_map_dir : path, optional
         Where ``<stem>_overlay.png`` and (with grains) ``<stem>_grains.png`` go.
+    mask_dir : path, optional
+        Where :func:`write_masks` writes the crack mask and label image.
     options : AnalysisOptions, optional
     seed : int, optional
 
@@ -85,18 +87,24 @@ def analyse_file(path, *, manifest_row=None, pixel_size_um=None, overlay_dir=Non
         The per-grain table (with grains).
     """
     path = pathlib.Path(path)
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     try:
         a = open_analysis(path, manifest_row=manifest_row, pixel_size_um=pixel_size_um,
                           options=options, seed=seed)
         cracks = a.crack_rows()
         row = a.summary()
         row["seconds"] = time.perf_counter() - t0
+        row["cpu_seconds"] = time.process_time() - c0
         if overlay_dir is not None:
             from .plot import overlay_cracks
+            o = a.objects
             write_image(pathlib.Path(overlay_dir) / (path.stem + "_overlay.png"),
-                        overlay_cracks(a.image, a.labels, pore_ids=a.objects.loc[
-                            a.objects["is_pore"], "crack_id"].to_numpy()))
+                        overlay_cracks(a.image, a.labels,
+                                       pore_ids=o.loc[o["is_pore"], "crack_id"].to_numpy(),
+                                       rejected_ids=a.rejected["crack_id"].to_numpy(),
+                                       region=a.region.mask))
+        if mask_dir is not None:
+            write_masks(a, mask_dir, path.stem)
         grains = None
         if a.grain_map is not None:
             lab, ph, grains = a.grain_map
@@ -114,6 +122,26 @@ def analyse_file(path, *, manifest_row=None, pixel_size_um=None, overlay_dir=Non
             None
 
 
+def write_masks(analysis, folder, stem):
+    """``<stem>_cracks.png`` (0 background, 255 crack) and ``<stem>_labels.png`` (16-bit crack
+    labels = ``crack_id`` of ``cracks.csv``; ``.tif`` 32-bit past 65535 cracks), in the raw
+    image's size (a cropped data bar is 0).
+
+    Parameters
+    ----------
+    analysis : CrackAnalysis
+    folder : path
+    stem : str
+    """
+    folder = pathlib.Path(folder)
+    lab = analysis.full_size(analysis.crack_labels)
+    write_image(folder / f"{stem}_cracks.png", np.where(lab > 0, 255, 0).astype(np.uint8))
+    if lab.max() <= np.iinfo(np.uint16).max:
+        write_image(folder / f"{stem}_labels.png", lab.astype(np.uint16))
+    else:
+        write_image(folder / f"{stem}_labels.tif", lab.astype(np.uint32))
+
+
 def _worker_init():
     """One OpenCV thread per worker process: the processes are the parallelism."""
     import cv2
@@ -127,7 +155,8 @@ def _manifest_rows(folder):
 
 
 def analyse_folder(folder, out, *, jobs=None, progress=True, overlays=True, pixel_size_um=None,
-                   labels=None, classes=None, seed=None, crack_tables=True, **options):
+                   labels=None, classes=None, seed=None, crack_tables=True, save_masks=False,
+                   **options):
     """Analyse every image of a folder; write the tables and figures of ``semkit analyse``.
 
     Parameters
@@ -155,34 +184,38 @@ def analyse_folder(folder, out, *, jobs=None, progress=True, overlays=True, pixe
     crack_tables : bool
         Write ``images.csv``, ``cracks.csv``, crack overlays and ``damage.csv`` (False: grain
         outputs only, ``semkit grains``).
+    save_masks : bool
+        Write ``masks/<stem>_cracks.png`` and ``masks/<stem>_labels.png`` (:func:`write_masks`).
     **options
         Fields of :class:`~semkit.options.AnalysisOptions`.
 
     Returns
     -------
     images : DataFrame
-        One row per image (failed ones with ``error``).
+        One row per image (failed ones with ``error``); ``images.attrs["skipped"]`` lists the
+        folder's other files (not images, not ``manifest.csv``), skipped.
     cracks : DataFrame
-        One row per crack.
+        One row per crack (and per rejected object, with ``rejected_as``).
 
     Raises
     ------
     InputError
-        ``folder`` is not a folder, holds no files, or its manifest is unreadable.
+        ``folder`` is not a folder, holds no image files, or its manifest is unreadable.
     """
     folder = pathlib.Path(folder)
     out = pathlib.Path(out)
     if not crack_tables:
         options["classify"] = False  # types are written nowhere without the crack tables
     opts = AnalysisOptions(**options)
-    files = list_images(folder)
+    files, skipped = list_folder(folder)
     if not files:
         raise InputError(f"{folder}: no image files found")
     man, mrows = _manifest_rows(folder)
     out.mkdir(parents=True, exist_ok=True)
     kw = dict(pixel_size_um=pixel_size_um, options=opts, seed=seed,
               overlay_dir=out / "overlays" if overlays and crack_tables else None,
-              grain_map_dir=out / "grain_maps" if overlays and opts.grains else None)
+              grain_map_dir=out / "grain_maps" if overlays and opts.grains else None,
+              mask_dir=out / "masks" if save_masks else None)
     order = [p.name for p in files]
     rows, cracks, grains = {}, {}, {}
     jobs = max(1, min(int(jobs or os.cpu_count() or 1), len(files)))
@@ -235,6 +268,7 @@ def analyse_folder(folder, out, *, jobs=None, progress=True, overlays=True, pixe
         out, images, cr, manifest=man if crack_tables else None,
         labels=labels if crack_tables else None,
         grain_tables=[grains[k] for k in order if grains.get(k) is not None], classes=classes)
+    images.attrs["skipped"] = [p.name for p in skipped]
     return images, cr
 
 

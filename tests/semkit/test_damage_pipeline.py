@@ -43,6 +43,10 @@ def test_analyse_writes_types_p_damage_and_grains(folder, tmp_path):
         r = imgs.loc[name]
         if r.area_S_um2 > 0:
             assert r.P == pytest.approx(r.area_T_um2 / r.area_S_um2)
+    # rows of rejected objects (rejected_as set) are not cracks and carry no type
+    rejected = cracks["rejected_as"].fillna("").astype(str) != ""
+    assert (cracks.loc[rejected, "type_post"] == "unknown").all()
+    cracks = cracks[~rejected]
     post = cracks[cracks.image != "img0.png"]
     assert set(post.type_post) <= {"tensile", "shear", "mixed"}
     assert (cracks[cracks.image == "img0.png"].type_post == "unknown").all()

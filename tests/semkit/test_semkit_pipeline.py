@@ -40,13 +40,15 @@ def test_batch_goes_on_and_records_errors(bad_folder, tmp_path, capsys):
                    "--pixel-size-um", "2.0", "--no-classify"])
     assert rc == 1
     err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and "4 of 7 images failed" in err[0]
+    # issue 15: a non-image file is skipped and listed in one line, not a failed image
+    assert len(err) == 2 and err[0] == "semkit: skipped 1 non-image file(s): notes.gif"
+    assert "3 of 6 images failed" in err[1]
     img = pd.read_csv(out / "images.csv", keep_default_na=False)
     assert list(img.columns[:12]) == analysis.IMAGE_COLUMNS
     errors = dict(zip(img["image"], img["error"]))
     assert "cannot read" in errors["corrupt.png"] and "cannot read" in errors["empty.tif"]
     assert "no contrast" in errors["dark.png"]
-    assert "unsupported format" in errors["notes.gif"]
+    assert "notes.gif" not in errors
     assert all(errors[n] == "" for n in GOOD)
     src = dict(zip(img["image"], img["pixel_size_source"]))
     assert src == {**src, "a.png": "manifest", "b.png": "magnification", "c.png": "cli"}
@@ -143,3 +145,24 @@ def test_bad_options():
         analyse_image(np.zeros((10, 10)), despeckle="gauss")
     with pytest.raises(InputError, match="pixel_size_um"):
         analyse_image(np.zeros((10, 10)), pixel_size_um=0)
+
+
+def test_save_masks_and_typing_only_on_loaded_stages(folder, tmp_path):
+    """--save-masks writes the 0/255 crack mask and the 16-bit labels (= crack_id); without
+    --classify only manifest images of a loaded stage are typed (b.png: failure)."""
+    from semkit.io import read_image
+    out = tmp_path / "o"
+    assert cli.main(["analyse", str(folder), "--out", str(out), "--no-progress", "--jobs", "1",
+                     "--save-masks", "--no-overlay"]) == 0
+    img = pd.read_csv(out / "images.csv").set_index("image")
+    assert img.loc["a.png", "P_status"] == "pre-test"
+    assert img.loc["c.png", "P_status"] == "not_classified"
+    assert img.loc["b.png", "P_status"] in ("ok", "no_shear", "no_cracks")
+    cracks = pd.read_csv(out / "cracks.csv")
+    for name in GOOD:
+        m = read_image(out / "masks" / f"{name[:-4]}_cracks.png")
+        lab = read_image(out / "masks" / f"{name[:-4]}_labels.png")
+        assert m.dtype == np.uint8 and set(np.unique(m)) <= {0, 255}
+        assert lab.dtype == np.uint16 and ((lab > 0) == (m == 255)).all()
+        kept = cracks[(cracks.image == name) & cracks.rejected_as.isna()]
+        assert set(np.unique(lab[lab > 0])) == set(kept.crack_id)
