@@ -62,7 +62,7 @@ def score_image(seed, shape, **options):
         code[c["crack_id"].to_numpy()] = [TYPE_CODE.get(t, 0) for t in c["type_post"]]
         tcode = np.zeros(len(h.cracks) + 1, int)
         tcode[h.cracks["crack_id"].to_numpy()] = [TYPE_CODE[t] for t in h.cracks["type"]]
-        pred, true = code[a.crack_labels], tcode[h.crack_labels]
+        pred, true = code[a.full_size(a.crack_labels)], tcode[h.crack_labels]
         both = (pred > 0) & (true > 0)
         out["type_acc_by_area"] = float((pred[both] == true[both]).mean()) if both.any() else \
             float("nan")

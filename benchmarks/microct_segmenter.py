@@ -1,9 +1,8 @@
 """Benchmark: the trainable crack segmenter on real micro-CT slices with hand-drawn masks.
 
 Data: ``shared/real_sem/rock_microct_311H`` (40 slices 256 x 256 of one fractured core, masks
-0/1 painted by hand; Apache-2.0; read in place, never copied). Found through the environment
-variable ``ROCKKIT_SHARED`` (the folder holding ``real_sem``) or ``../shared`` beside the
-repository.
+0/1 painted by hand; Apache-2.0; read in place, never copied). Found through
+``ROCKKIT_SHARED`` or ``shared/real_sem`` beside the repository (``real_images.shared_dir``).
 
 Neighbouring slices are correlated, so the 40 slices (sorted by slice number) are cut into
 four contiguous blocks of 10; the segmenter is trained on one block and scored on the other 30.
@@ -13,7 +12,10 @@ painted pixel). Scoring (the data set's README): both masks skeletonised, a skel
 found within 2 px of the other mask; precision, recall, F1 of centreline pixels and the
 skeleton length ratio, per test slice; medians and minima over the 30.
 
-The predicted mask is ``P(crack) >= threshold`` with isolated specks of <= 15 px removed.
+Two predictions are scored: the segmenter's own mask (``P(crack) >= threshold``, isolated
+specks of <= 15 px removed) and the crack objects of ``semkit analyse --segmenter`` (the
+analysis with the segmenter in place of threshold and ridge lines: sample region, cleaning,
+rejections).
 
 Writes ``benchmarks/semkit_results/microct_segmenter.json`` and prints a markdown table.
 
@@ -38,12 +40,10 @@ SPECK_PX = 15
 
 def microct_folder():
     """The micro-CT data folder, or None when it is not on this machine."""
-    env = os.environ.get("ROCKKIT_SHARED")
-    for base in ([pathlib.Path(env)] if env else []) + [ROOT.parent / "shared"]:
-        d = base / "real_sem" / "rock_microct_311H"
-        if (d / "images").is_dir():
-            return d
-    return None
+    sys.path.insert(0, str(ROOT / "benchmarks"))
+    from real_images import shared_dir
+    d = shared_dir() / "rock_microct_311H"
+    return d if (d / "images").is_dir() else None
 
 
 def load_slices(folder):
@@ -69,7 +69,7 @@ def predicted_mask(segmenter, grey):
 
 def run_block(block, names, images, masks, *, trees, seed=0, n_jobs=None, progress=False):
     """Train on block ``block`` (slices 10 block .. 10 block + 9), score the rest."""
-    from semkit.scoring import centreline_scores
+    from semkit.evaluate import centreline_scores
     from semkit.segmenter import labels_from_mask, train_segmenter
     train = list(range(10 * block, 10 * block + 10))
     test = [i for i in range(len(images)) if i not in train]
@@ -79,19 +79,27 @@ def run_block(block, names, images, masks, *, trees, seed=0, n_jobs=None, progre
                           names=[names[i] for i in train], n_trees=trees, n_jobs=n_jobs,
                           progress=progress, seed=seed)
     t_train = time.perf_counter() - t0
+    from semkit.analysis import analyse_image
     rows, t_pred = [], 0.0
     for i in test:
         t0 = time.perf_counter()
         pred = predicted_mask(seg, images[i])
         t_pred += time.perf_counter() - t0
-        rows.append(dict(slice=names[i], **centreline_scores(pred, masks[i])))
-    f1 = np.array([r["f1"] for r in rows])
+        a = analyse_image(images[i], segmenter=seg, name=names[i])
+        s_an = centreline_scores(a.full_size(a.crack_labels) > 0, masks[i])
+        rows.append(dict(slice=names[i], **centreline_scores(pred, masks[i]),
+                         analyse_f1=s_an["f1"], analyse_precision=s_an["precision"],
+                         analyse_recall=s_an["recall"]))
+
+    def med(k):
+        return float(np.median([r[k] for r in rows]))
     return seg, rows, dict(
         block=block, train_slices=[names[i] for i in train], n_test=len(test),
-        median_precision=float(np.median([r["precision"] for r in rows])),
-        median_recall=float(np.median([r["recall"] for r in rows])),
-        median_f1=float(np.median(f1)), min_f1=float(f1.min()),
-        median_length_ratio=float(np.median([r["length_ratio"] for r in rows])),
+        median_precision=med("precision"), median_recall=med("recall"), median_f1=med("f1"),
+        min_f1=float(min(r["f1"] for r in rows)), median_length_ratio=med("length_ratio"),
+        analyse_median_f1=med("analyse_f1"), analyse_median_precision=med("analyse_precision"),
+        analyse_median_recall=med("analyse_recall"),
+        analyse_min_f1=float(min(r["analyse_f1"] for r in rows)),
         train_s=t_train, predict_mp_per_s=len(test) * images[0].size / 1e6 / t_pred,
         oob=seg.scores)
 
@@ -124,15 +132,18 @@ def main(argv=None):
     name = "microct_segmenter_all_blocks.json" if args.all_blocks else "microct_segmenter.json"
     (OUT / name).write_text(json.dumps(dict(meta=meta, results=results), indent=1))
     print(f"load average {meta['load'][0]:.1f} (timings provisional on a shared machine)")
-    print("| train block (slices) | median P | median R | median F1 | min F1 | median length "
-          "ratio | train s | predict MP/s |")
+    print("| train block (slices) | scored | median P | median R | median F1 | min F1 | "
+          "train s | predict MP/s |")
     print("|---|---|---|---|---|---|---|---|")
     for r in results:
         s = r["train_slices"]
-        print(f"| {r['block']} ({s[0][6:]}-{s[-1][6:]}) | {r['median_precision']:.3f} | "
+        blk = f"{r['block']} ({s[0][6:]}-{s[-1][6:]})"
+        print(f"| {blk} | segmenter mask | {r['median_precision']:.3f} | "
               f"{r['median_recall']:.3f} | {r['median_f1']:.3f} | {r['min_f1']:.3f} | "
-              f"{r['median_length_ratio']:.2f} | {r['train_s']:.0f} | "
-              f"{r['predict_mp_per_s']:.2f} |")
+              f"{r['train_s']:.0f} | {r['predict_mp_per_s']:.2f} |")
+        print(f"| {blk} | analyse --segmenter | {r['analyse_median_precision']:.3f} | "
+              f"{r['analyse_median_recall']:.3f} | {r['analyse_median_f1']:.3f} | "
+              f"{r['analyse_min_f1']:.3f} | | |")
     return 0
 
 

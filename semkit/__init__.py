@@ -44,10 +44,9 @@ _LAZY = {
     "indices_from_table": "indices", "split_range": "indices", "table_with_ranges": "indices",
     "image_damage": "damage", "damage_table": "damage", "flag_outliers": "damage",
     "typed_areas": "damage", "plot_p_by_stage": "damage",
-    # trainable crack segmenter, scores against hand-drawn masks
+    # trainable crack segmenter
     "train_segmenter": "segmenter", "Segmenter": "segmenter", "labels_from_mask": "segmenter",
     "load_segmenter": "segmenter_file", "save_segmenter": "segmenter_file",
-    "centreline_scores": "scoring",
 }
 
 __all__ = ["InputError", *_LAZY]

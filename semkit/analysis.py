@@ -367,10 +367,14 @@ class CrackAnalysis:
             return self.cracks
         from .classify import classify_stage, load_model
         model = load_model(self.options.crack_model) if self.options.crack_model else None
+        th = None if self.options.segmenter is not None else self.thresholded
         return classify_stage(self.cracks, self.crack_labels, grey=self.smooth,
                               pixel_size_um=self.pixel_size_um, model=model,
                               post=self.typing_post,
-                              grain_labels=None if self.grain_map is None else self.grain_map[0])
+                              grain_labels=None if self.grain_map is None else self.grain_map[0],
+                              skeleton=self.skeleton,
+                              background=None if th is None else th.background,
+                              crack_level=None if th is None else th.crack_level)
 
     def full_size(self, a):
         """``a`` (an array of ``image``'s shape) padded back to the raw image's shape: the
@@ -407,7 +411,9 @@ class CrackAnalysis:
         from .damage import image_damage
         d = image_damage(c.assign(image=self.name)).iloc[0]
         return dict(area_T_um2=float(d.area_T_um2), area_S_um2=float(d.area_S_um2),
-                    area_M_um2=float(d.area_mixed_um2), P=float(d.P), P_status=d.P_status)
+                    area_M_um2=float(d.area_mixed_um2), P=float(d.P), P_status=d.P_status,
+                    P_low=float(d.get("P_low", nan)), P_high=float(d.get("P_high", nan)),
+                    P_note=str(d.get("P_note", "")))
 
     def summary(self) -> dict:
         """The row this image contributes to ``images.csv`` (``seconds`` is set by the caller).

@@ -155,7 +155,7 @@ def _confidence(out, c, area, mixed):
     for img, status in zip(out["image"], out["P_status"]):
         sel = (c["image"] == img).to_numpy()
         r = p_confidence(area[sel], prob[sel], trusted=trusted[sel],
-                         trace=c["trace_id"].to_numpy()[sel] if "trace_id" in c else None,
+                         group=c["group_id"].to_numpy()[sel] if "group_id" in c else None,
                          mixed=mixed, notes=c["type_note"].astype(str).to_numpy()[sel]
                          if "type_note" in c else None,
                          tensile_fraction=c["tensile_fraction"].to_numpy()[sel]

@@ -20,7 +20,7 @@ PV_BACKGROUND_SIGMA_PX = config.PV_BACKGROUND_SIGMA_PX
 
 
 def darkness_fraction(image, crack_labels, *, core=None, band_px=PV_BAND_PX,
-                      background_sigma_px=PV_BACKGROUND_SIGMA_PX):
+                      background_sigma_px=PV_BACKGROUND_SIGMA_PX, background=None):
     """Partial-volume darkness of each pixel near the cracks (0 background .. 1 crack core).
 
     Parameters
@@ -31,6 +31,8 @@ def darkness_fraction(image, crack_labels, *, core=None, band_px=PV_BAND_PX,
         Grey level of a fully dark crack pixel; default the 2nd percentile inside the objects.
     band_px, background_sigma_px : float
         See :func:`typed_areas`.
+    background : (M, N) ndarray, optional
+        Local background grey (e.g. the threshold stage's); estimated when not given.
 
     Returns
     -------
@@ -55,15 +57,18 @@ def darkness_fraction(image, crack_labels, *, core=None, band_px=PV_BAND_PX,
     src[near[obj]] = lab[obj]
     owner = src[near]
     region = dist <= band_px
-    bg_mask = dist > band_px + 1
+    if background is not None:
+        bg = np.asarray(background, np.float64)
+    else:
+        bg_mask = dist > band_px + 1
 
-    def blur(a):
-        return cv2.GaussianBlur(a, (0, 0), background_sigma_px,
-                                borderType=cv2.BORDER_REFLECT)
-    num = blur(np.where(bg_mask, img, 0.0))
-    den = blur(bg_mask.astype(np.float64))
-    fill = np.median(img[bg_mask]) if bg_mask.any() else img.max()
-    bg = np.where(den > 1e-3, num / np.maximum(den, 1e-3), fill)
+        def blur(a):
+            return cv2.GaussianBlur(a.astype(np.float32), (0, 0), background_sigma_px,
+                                    borderType=cv2.BORDER_REFLECT).astype(np.float64)
+        num = blur(np.where(bg_mask, img, 0.0))
+        den = blur(bg_mask)
+        fill = np.median(img[bg_mask]) if bg_mask.any() else img.max()
+        bg = np.where(den > 1e-3, num / np.maximum(den, 1e-3), fill)
     if core is None:
         core = float(np.percentile(img[obj], 2)) if obj.any() else float(img.min())
     f = np.clip((bg - img) / np.maximum(bg - float(core), 1e-6), 0.0, 1.0)
@@ -82,7 +87,7 @@ def _owner_types(type_image, lab, owner):
 
 
 def typed_areas(image, crack_labels, type_image=None, *, core=None, band_px=PV_BAND_PX,
-                background_sigma_px=PV_BACKGROUND_SIGMA_PX):
+                background_sigma_px=PV_BACKGROUND_SIGMA_PX, background=None):
     """Partial-volume crack areas per object, split by post-test type.
 
     Thin cracks (1-2 px, typical of shear) lose about half their area to any pixel threshold
@@ -103,6 +108,8 @@ def typed_areas(image, crack_labels, type_image=None, *, core=None, band_px=PV_B
         Pixels within this distance of an object count (blur spreads darkness beyond it).
     background_sigma_px : float
         Scale of the local background (normalised convolution over non-crack pixels).
+    background : (M, N) ndarray, optional
+        A local background already at hand (the threshold stage's); replaces the estimate.
 
     Returns
     -------
@@ -124,7 +131,8 @@ def typed_areas(image, crack_labels, type_image=None, *, core=None, band_px=PV_B
         return pd.DataFrame(columns=cols)
     obj = lab > 0
     f, owner = darkness_fraction(img, lab, core=core, band_px=band_px,
-                                 background_sigma_px=background_sigma_px)
+                                 background_sigma_px=background_sigma_px,
+                                 background=background)
     types = np.zeros(lab.shape, np.int64) if type_image is None else \
         _owner_types(np.asarray(type_image).astype(np.int64), lab, owner)
     out = {"crack_id": np.arange(1, n + 1),

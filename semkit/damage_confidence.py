@@ -1,8 +1,8 @@
 """How sure an image's P = A_T / A_S is: a band from the calibrated crack-type probabilities,
 and the ``low_confidence`` flag.
 
-Every crack trace has calibrated probabilities of being tensile, shear or mixed
-(:func:`semkit.classify.classify_post`). Drawing each trace's type from them ``N_DRAWS`` times
+Every crack group has calibrated probabilities of being tensile, shear or mixed
+(:func:`semkit.classify.classify_post`). Drawing each group's type from them ``N_DRAWS`` times
 (fixed seed) and recomputing P each time gives the spread of P that the typing uncertainty
 alone causes; ``P_low``, ``P_high`` are its ``P_BAND`` quantiles. P is reported with
 ``P_status = low_confidence`` (and a ``P_note`` saying why) when
@@ -30,7 +30,7 @@ _NO_SHEAR_DRAWS_MAX = 0.1
 
 
 def _draw_areas(area, prob, mixed, tensile_fraction, rng):
-    """A_T and A_S of N_DRAWS type draws (traces x draws)."""
+    """A_T and A_S of N_DRAWS type draws (groups x draws)."""
     u = rng.random((N_DRAWS, len(area)))
     cum = np.cumsum(prob, axis=1)
     k = (u[:, :, None] > cum[None, :, :-1]).sum(axis=2)   # 0 tensile, 1 shear, 2 mixed
@@ -43,7 +43,7 @@ def _draw_areas(area, prob, mixed, tensile_fraction, rng):
     return a_t, a_s
 
 
-def p_confidence(area, prob, *, trusted=None, trace=None, mixed="exclude",
+def p_confidence(area, prob, *, trusted=None, group=None, mixed="exclude",
                  tensile_fraction=None, notes=None):
     """P band, status and note of one image from its cracks' areas and type probabilities.
 
@@ -56,8 +56,8 @@ def p_confidence(area, prob, *, trusted=None, trace=None, mixed="exclude",
         user is one-hot).
     trusted : (n,) array_like of bool, optional
         ``type_post_ok`` of each crack.
-    trace : (n,) array_like of int, optional
-        Trace of each crack: the cracks of one trace share one draw.
+    group : (n,) array_like of int, optional
+        Group of each crack (``group_id``): the cracks of one group share one draw.
     mixed : str
         As :func:`semkit.damage.image_damage`.
     tensile_fraction : (n,) array_like of float, optional
@@ -86,8 +86,8 @@ def p_confidence(area, prob, *, trusted=None, trace=None, mixed="exclude",
     trusted = np.ones(n, bool) if trusted is None else np.asarray(trusted, bool)
     tf = np.full(n, 0.5) if tensile_fraction is None else np.nan_to_num(
         np.asarray(tensile_fraction, float), nan=0.5)
-    if trace is not None and n:
-        _, inv = np.unique(np.asarray(trace), return_inverse=True)
+    if group is not None and n:
+        _, inv = np.unique(np.asarray(group), return_inverse=True)
         t_area = np.bincount(inv, weights=area)
         t_prob = np.zeros((inv.max() + 1, 3))
         np.add.at(t_prob, inv, prob * area[:, None])

@@ -85,6 +85,9 @@ def write_science_outputs(out, images, cracks, *, manifest=None, labels=None, gr
                 images.loc[sel, ["area_T_um2", "area_S_um2", "P"]] = \
                     [r.area_T_um2, r.area_S_um2, r.P]
                 images.loc[sel, "P_status"] = r.P_status
+                for k in ("P_low", "P_high", "P_note"):
+                    if k in d.columns:
+                        images.loc[sel, k] = r[k]
         write_csv_atomic(images, out / "images.csv")
         write_csv_atomic(cracks, out / "cracks.csv")
     if manifest is not None and {"specimen", "test", "stage"} <= set(manifest.columns) \

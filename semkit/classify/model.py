@@ -1,4 +1,4 @@
-"""The post-test crack model: calibrated tensile / shear / mixed probabilities per crack trace,
+"""The post-test crack model: calibrated tensile / shear / mixed probabilities per crack group,
 and the range of features it was trained on.
 
 Two stages, both small and JSON-able (no pickle):
@@ -6,16 +6,16 @@ Two stages, both small and JSON-able (no pickle):
 1. a logistic model of P(tensile) at each skeleton pixel from the morphology in the box around
    it (:data:`semkit.classify.morphology.LOCAL_NAMES`), fitted on the pixels of tensile and
    shear stretches;
-2. a multinomial logistic model that types each trace from its morphology
+2. a multinomial logistic model that types each crack group from its morphology
    (:data:`semkit.classify.morphology.FEATURE_NAMES`), the mean and the 20th / 80th
    percentiles of stage 1 along it and the share above 0.5 (:data:`STAGE2_NAMES`: a mixed
    crack has a tensile and a shear stretch), plus pairwise products of a few of them
-   (:data:`PRODUCTS`). Each trace is weighted by the square root of its labelled area.
+   (:data:`PRODUCTS`). Each group is weighted by the square root of its labelled area.
 
 The stage-2 scores are divided by a temperature fitted on a separate calibration set (minimum
 log loss), so the probabilities are calibrated. The model stores, per stage-2 feature, the
-range of the training traces (0.5-99.5 % quantiles widened by ``RANGE_PAD`` of their span): a
-trace outside it is reported as untyped (``type_post_ok = False``, the feature named).
+range of the training groups (0.5-99.5 % quantiles widened by ``RANGE_PAD`` of their span): a
+group outside it is reported as untyped (``type_post_ok = False``, the feature named).
 
 :func:`train_post` fits it (``semkit classify --train``); :func:`save_model` /
 :func:`load_model` write and read the JSON form.
@@ -31,25 +31,25 @@ from ..errors import InputError
 from .morphology import FEATURE_NAMES, LOCAL_NAMES, crack_morphology, group_quantile
 
 __all__ = ["DEFAULT_POST_MODEL", "train_post", "fit_post", "calibrate", "save_model",
-           "load_model", "check_model", "type_probabilities", "trace_design", "out_of_range",
+           "load_model", "check_model", "type_probabilities", "group_design", "out_of_range",
            "image_samples", "TYPE_CODES", "TYPES", "PRODUCTS", "STAGE2_NAMES", "VERSION"]
 
 VERSION = 3
 TYPES = ("tensile", "shear", "mixed")
 TYPE_CODES = {"tensile": 1, "shear": 2, "mixed": 3}
-#: stage-2 features: the trace morphology and the summary of stage 1 along the trace.
+#: stage-2 features: the group morphology and the summary of stage 1 along it.
 STAGE2_NAMES = (*FEATURE_NAMES, "p_mean", "p_lo", "p_hi", "p_share")
 #: stage-2 features whose pairwise products (with squares) enter the model.
 PRODUCTS = ("p_lo", "p_hi", "log_aperture", "thin_share")
 #: inverse L2 strengths of the two logistic models (standardised features).
 C_PIXEL = 1.0
-C_TRACE = 1.0
+C_GROUP = 1.0
 #: at most this many skeleton pixels (subsampled with the seed) fit stage 1.
 MAX_PIXELS = 200_000
 #: training-range quantiles and the padding (share of the span) of the out-of-range check.
 RANGE_Q = (0.005, 0.995)
 RANGE_PAD = 0.1
-#: a trace of at least this share of labelled pixels takes the majority label in training.
+#: a group of at least this share of labelled pixels takes the majority label in training.
 MIN_LABELLED = 0.5
 
 #: default post-test model (``semkit/classify/model.json``), fitted by
@@ -85,11 +85,11 @@ def pixel_p_tensile(X_local, model):
     return 1.0 / (1.0 + np.exp(-np.clip(s, -50, 50)))
 
 
-def trace_design(F, local, model):
-    """Stage-2 features of every trace (rows indexed like ``F``): :data:`STAGE2_NAMES`."""
+def group_design(F, local, model):
+    """Stage-2 features of every group (rows indexed like ``F``): :data:`STAGE2_NAMES`."""
     m = len(F)
     p = pixel_p_tensile(local["X"], model)
-    g = local["trace"]
+    g = local["group"]
     cnt = np.bincount(g, minlength=m)
     mean = np.bincount(g, weights=p, minlength=m) / np.maximum(cnt, 1)
     share = np.bincount(g, weights=(p > 0.5).astype(float), minlength=m) / np.maximum(cnt, 1)
@@ -106,7 +106,7 @@ def _scores(D, model):
 
 
 def type_probabilities(D, model):
-    """Calibrated P(tensile), P(shear), P(mixed) of traces with stage-2 features ``D``."""
+    """Calibrated P(tensile), P(shear), P(mixed) of groups with stage-2 features ``D``."""
     if len(D) == 0:
         return np.zeros((0, 3))
     return _softmax(_scores(D, model) / float(model["temperature"]))
@@ -164,26 +164,26 @@ def image_samples(crack_labels, labels, *, modes=None, image=None, skeleton=None
     -------
     sample : dict
         ``F, local`` (morphology), ``pixel_y`` (stage-1 label per skeleton pixel: 1 tensile,
-        0 shear, -1 unknown), ``trace_ids, trace_y, trace_area`` (traces with at least
+        0 shear, -1 unknown), ``group_ids, group_y, group_area`` (groups with at least
         ``MIN_LABELLED`` labelled pixels, their majority type 0/1/2 and labelled area).
     """
     lab = np.asarray(crack_labels)
     n = int(lab.max())
     pix = _pixel_codes(lab, labels)
     mode = np.where(pix <= 2, pix, 0) if modes is None else np.asarray(modes)
-    trace_of, F, local = crack_morphology(lab, image=image, skeleton=skeleton,
+    group_of, F, local = crack_morphology(lab, image=image, skeleton=skeleton,
                                           background=background, crack_level=crack_level)
     md = mode[local["rr"], local["cc"]]
     pixel_y = np.where(md == 1, 1, np.where(md == 2, 0, -1))
-    grp = trace_of[lab]
+    grp = group_of[lab]
     M = np.zeros((n + 1, 4))
     np.add.at(M, (grp[lab > 0], pix[lab > 0]), 1.0)
     tot = M.sum(axis=1)
     ok = (M[:, 1:].sum(axis=1) >= MIN_LABELLED * np.maximum(tot, 1)) & (tot > 0)
     ok &= np.isfinite(F[:, 0])
     ids = np.flatnonzero(ok)
-    return dict(F=F, local=local, pixel_y=pixel_y, trace_ids=ids,
-                trace_y=M[ids, 1:].argmax(axis=1), trace_area=M[ids, 1:].sum(axis=1))
+    return dict(F=F, local=local, pixel_y=pixel_y, group_ids=ids,
+                group_y=M[ids, 1:].argmax(axis=1), group_area=M[ids, 1:].sum(axis=1))
 
 
 def _logistic(X, y, w, c, seed):
@@ -192,7 +192,7 @@ def _logistic(X, y, w, c, seed):
                                                                          sample_weight=w)
 
 
-def fit_post(samples, *, c_pixel=C_PIXEL, c_trace=C_TRACE, seed=0, products=PRODUCTS):
+def fit_post(samples, *, c_pixel=C_PIXEL, c_group=C_GROUP, seed=0, products=PRODUCTS):
     """Fit both stages and the trained ranges from :func:`image_samples` dicts (temperature 1;
     see :func:`calibrate`)."""
     Xp = np.concatenate([s["local"]["X"] for s in samples])
@@ -213,14 +213,14 @@ def fit_post(samples, *, c_pixel=C_PIXEL, c_trace=C_TRACE, seed=0, products=PROD
              "features": list(STAGE2_NAMES), "products": list(products),
              "pixel_mean": pm.tolist(), "pixel_scale": ps.tolist(),
              "pixel_coef": lr.coef_[0].tolist(), "pixel_intercept": float(lr.intercept_[0])}
-    D, y, area = _trace_rows(samples, model)
+    D, y, area = _group_rows(samples, model)
     if len(set(y.tolist())) < 2:
         raise InputError("labels: training needs at least two crack types")
     fill = np.nanmean(D, axis=0)
     E = _expand(np.where(np.isfinite(D), D, fill), list(STAGE2_NAMES), list(products))
     mean, scale = E.mean(axis=0), E.std(axis=0)
     scale[scale == 0] = 1.0
-    lr = _logistic((E - mean) / scale, y, np.sqrt(area), c_trace, seed)
+    lr = _logistic((E - mean) / scale, y, np.sqrt(area), c_group, seed)
     coef = np.zeros((3, E.shape[1]))
     icpt = np.full(3, -30.0)  # a type never seen in training gets no probability
     present = lr.classes_.astype(int)
@@ -234,22 +234,22 @@ def fit_post(samples, *, c_pixel=C_PIXEL, c_trace=C_TRACE, seed=0, products=PROD
     model.update({"mean": mean.tolist(), "scale": scale.tolist(), "coef": coef.tolist(),
                   "intercept": icpt.tolist(), "temperature": 1.0,
                   "range_lo": (q_lo - pad).tolist(), "range_hi": (q_hi + pad).tolist(),
-                  "c_pixel": float(c_pixel), "c_trace": float(c_trace), "seed": int(seed),
-                  "n_pixels": int(len(yp)), "n_traces": int(len(y)),
+                  "c_pixel": float(c_pixel), "c_group": float(c_group), "seed": int(seed),
+                  "n_pixels": int(len(yp)), "n_groups": int(len(y)),
                   "n_per_type": np.bincount(y, minlength=3).tolist()})
     return model
 
 
-def _trace_rows(samples, model):
-    D = [trace_design(s["F"], s["local"], model)[s["trace_ids"]] for s in samples]
-    return (np.concatenate(D), np.concatenate([s["trace_y"] for s in samples]).astype(int),
-            np.concatenate([s["trace_area"] for s in samples]))
+def _group_rows(samples, model):
+    D = [group_design(s["F"], s["local"], model)[s["group_ids"]] for s in samples]
+    return (np.concatenate(D), np.concatenate([s["group_y"] for s in samples]).astype(int),
+            np.concatenate([s["group_area"] for s in samples]))
 
 
 def calibrate(model, samples):
     """Fit the temperature on calibration samples (minimum log loss); returns the model."""
     from scipy.optimize import minimize_scalar
-    D, y, _ = _trace_rows(samples, model)
+    D, y, _ = _group_rows(samples, model)
     s = _scores(D, model)
 
     def nll(log_t):
@@ -280,7 +280,7 @@ def train_post(samples, *, seed=None, calibration=None):
     Raises
     ------
     InputError
-        No tensile or no shear cracks, or fewer than two types of trace, among the labels.
+        No tensile or no shear cracks, or fewer than two types of group, among the labels.
     """
     def collect(ss):
         return [image_samples(s[0], s[1], image=s[2] if len(s) > 2 else None) for s in ss]

@@ -6,16 +6,15 @@ longer match, so the aperture varies and closes (incomplete walls), the trace st
 (en-echelon offsets), splits into parallel layers and sheds debris. Mixed cracks show both
 along one crack.
 
-The unit typed is a *trace*: a crack object with the small fragments and debris within
-``LINK_PX`` of it (:func:`crack_groups`), joined with the groups that continue it across a gap
-or an en-echelon step (:func:`crack_traces`: skeleton end points within ``GAP_PX``, traces
-within ``CONTINUE_DEG`` of each other, sideways offset <= ``STEP_PX``), so that the pieces of a
-stepped shear trace, or of a mixed crack that the detection cut in two, are read together.
-:func:`crack_morphology` measures the features on every trace from whole-image OpenCV filters
-(distance transform) and box sums at skeleton pixels (numba), summed per trace with
-``bincount``: the cost grows with the skeleton, not with the number of cracks.
+The unit typed is a crack *group*: a crack object with the small fragments and debris within
+``LINK_PX`` of it (:func:`crack_groups`). (Joining groups that continue each other across gaps
+into longer traces was tried: on the training family it joined distinct cracks as often as the
+pieces of one, and typing accuracy fell on every evaluation set.) :func:`crack_morphology`
+measures the features of every group from an OpenCV distance transform (5 x 5 mask) and box
+sums at skeleton pixels (numba), summed per group with ``bincount``: the cost grows with the
+skeleton, not with the number of cracks.
 
-Features (:data:`FEATURE_NAMES`), per trace, over its skeleton pixels unless said otherwise:
+Features (:data:`FEATURE_NAMES`), per group, over its skeleton pixels unless said otherwise:
 
 - ``log_aperture`` — mean log of the aperture (2 x distance to the wall - 1, px);
 - ``aperture_cv`` — SD / mean of the aperture along the whole group (matching walls: low;
@@ -30,13 +29,13 @@ Features (:data:`FEATURE_NAMES`), per trace, over its skeleton pixels unless sai
 - ``pieces`` — log(1 + objects per 100 px of skeleton) (fragmented traces);
 - ``excess`` — dark area in the box not explained by the trace's own aperture, over the
   trace's area (debris, parallel fragments);
-- ``fill`` — mean partial-volume darkness (B - I)/(B - I_core) of the trace's mask pixels (a
+- ``fill`` — mean partial-volume darkness (B - I)/(B - I_core) of the group's mask pixels (a
   clean opening reads about 1; thin, bridged or layered traces read lighter);
 - ``thin_share``, ``wide_share`` — share of the skeleton with aperture <= 2 px and >= 4 px;
-- ``log_length`` — log of the trace's skeleton length, px.
+- ``log_length`` — log of the group's skeleton length, px.
 
 The same quantities in the box around every skeleton pixel (:data:`LOCAL_NAMES`) tell a
-tensile stretch from a shear stretch along one trace (``semkit.classify.model``, stage 1).
+tensile stretch from a shear stretch along one crack (``semkit.classify.model``, stage 1).
 """
 from __future__ import annotations
 
@@ -44,9 +43,8 @@ import numpy as np
 
 from .. import config
 
-__all__ = ["crack_groups", "crack_traces", "crack_morphology", "group_quantile",
-           "FEATURE_NAMES", "LOCAL_NAMES", "WINDOW_PX", "LINK_PX", "SMALL_OBJECT_PX", "GAP_PX",
-           "CONTINUE_DEG", "STEP_PX"]
+__all__ = ["crack_groups", "crack_morphology", "group_quantile", "FEATURE_NAMES",
+           "LOCAL_NAMES", "WINDOW_PX", "LINK_PX", "SMALL_OBJECT_PX"]
 
 #: side of the box of the local features, px.
 WINDOW_PX = 15
@@ -56,13 +54,6 @@ LINK_PX = config.LINK_PX
 SMALL_OBJECT_PX = config.SMALL_OBJECT_PX
 #: aperture limits of thin_share and wide_share, px.
 THIN_PX, WIDE_PX = 2.0, 4.0
-#: traces continue each other across gaps of up to GAP_PX when their directions differ by at
-#: most CONTINUE_DEG and the second starts at most STEP_PX to the side of the first.
-GAP_PX = 12.0
-CONTINUE_DEG = 45.0
-STEP_PX = 6.0
-#: end-point direction: skeleton pixels of the same object within this box half-size.
-END_DIRECTION_PX = 6
 #: side of the grey closing that estimates the background when none is given, px.
 BACKGROUND_PX = 11
 FEATURE_NAMES = ("log_aperture", "aperture_cv", "local_cv", "scatter", "layers", "endpoints",
@@ -132,81 +123,9 @@ def group_quantile(g, v, q, m):
     return out
 
 
-def crack_traces(crack_labels, group_of, skeleton, *, gap_px=GAP_PX,
-                 continue_deg=CONTINUE_DEG, step_px=STEP_PX):
-    """Join crack groups that continue each other across a gap or an en-echelon step.
-
-    Parameters
-    ----------
-    crack_labels : (M, N) ndarray of int
-    group_of : (n + 1,) ndarray of int
-        From :func:`crack_groups`.
-    skeleton : (M, N) ndarray of bool
-    gap_px, continue_deg, step_px : float
-        Two groups are joined when an end point of one lies within ``gap_px`` of an end point
-        of the other, the outward directions there are opposite within ``continue_deg`` (the
-        traces continue each other) and the second end point lies at most ``step_px`` to the
-        side of the first's direction.
-
-    Returns
-    -------
-    trace_of : (n + 1,) ndarray of int64
-        Trace id of each object (the smallest group id of the joined groups; 0 -> 0).
-
-    Examples
-    --------
-    >>> lab = np.zeros((30, 80), np.int32); lab[10, 5:35] = 1; lab[13, 40:75] = 2
-    >>> lab[25, 5:20] = 3
-    >>> g = crack_groups(lab, small_px=1)
-    >>> crack_traces(lab, g, lab > 0).tolist()
-    [0, 1, 1, 3]
-    """
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import connected_components
-    from scipy.spatial import cKDTree
-
-    from .._kernels import endpoint_directions
-    lab = np.asarray(crack_labels)
-    group_of = np.asarray(group_of, np.int64)
-    m = group_of.size
-    trace_of = group_of.copy()
-    skel = np.asarray(skeleton, bool) & (lab > 0)
-    sk8 = skel.astype(np.uint8)
-    nb = np.zeros(lab.shape, np.int16)
-    p = np.pad(sk8, 1)
-    for di in (0, 1, 2):
-        for dj in (0, 1, 2):
-            if di != 1 or dj != 1:
-                nb += p[di:di + lab.shape[0], dj:dj + lab.shape[1]]
-    er, ec = np.nonzero(skel & (nb <= 1))
-    if er.size < 2:
-        return trace_of
-    d = np.zeros((er.size, 2))
-    endpoint_directions(lab.astype(np.int32), sk8, er.astype(np.int64), ec.astype(np.int64),
-                        END_DIRECTION_PX, d)
-    pairs = cKDTree(np.column_stack([er, ec])).query_pairs(gap_px, output_type="ndarray")
-    if not len(pairs):
-        return trace_of
-    a, b = pairs[:, 0], pairs[:, 1]
-    ga, gb = group_of[lab[er[a], ec[a]]], group_of[lab[er[b], ec[b]]]
-    v = np.column_stack([er[b] - er[a], ec[b] - ec[a]]).astype(float)
-    opposite = -(d[a] * d[b]).sum(axis=1) >= np.cos(np.radians(continue_deg))
-    side = np.abs(d[a, 0] * v[:, 1] - d[a, 1] * v[:, 0])
-    ok = (ga != gb) & opposite & (side <= step_px) & (np.abs(d[a]).sum(axis=1) > 0)
-    if not ok.any():
-        return trace_of
-    graph = coo_matrix((np.ones(ok.sum()), (ga[ok], gb[ok])), shape=(m, m))
-    _, comp = connected_components(graph, directed=False)
-    first = np.full(comp.max() + 1, m, np.int64)
-    np.minimum.at(first, comp[group_of], group_of)
-    trace_of = first[comp[group_of]]
-    trace_of[0] = 0
-    return trace_of
-
-
 def crack_morphology(crack_labels, *, image=None, skeleton=None, background=None,
                      crack_level=None, window_px=WINDOW_PX, link_px=LINK_PX):
-    """Morphology of every crack trace, and of every skeleton pixel.
+    """Morphology of every crack group, and of every skeleton pixel.
 
     Parameters
     ----------
@@ -224,13 +143,13 @@ def crack_morphology(crack_labels, *, image=None, skeleton=None, background=None
 
     Returns
     -------
-    trace_of : (n + 1,) ndarray of int64
-        Trace of each object (:func:`crack_traces`).
+    group_of : (n + 1,) ndarray of int64
+        Group of each object (:func:`crack_groups`).
     features : (n + 1, K) ndarray of float64
-        Features of each trace, indexed by trace id (rows of ids that are not traces, and
-        traces without skeleton, are NaN), columns :data:`FEATURE_NAMES`.
+        Features of each group, indexed by group id (rows of ids that are not groups, and
+        groups without skeleton, are NaN), columns :data:`FEATURE_NAMES`.
     local : dict
-        ``rr, cc`` (skeleton pixels), ``trace`` (their trace ids) and ``X`` (their local
+        ``rr, cc`` (skeleton pixels), ``group`` (their group ids) and ``X`` (their local
         features in the box, columns :data:`LOCAL_NAMES`).
     """
     import cv2
@@ -240,17 +159,17 @@ def crack_morphology(crack_labels, *, image=None, skeleton=None, background=None
     lab = np.asarray(crack_labels)
     n = int(lab.max())
     F = np.full((n + 1, len(FEATURE_NAMES)), np.nan)
-    empty = dict(rr=np.zeros(0, int), cc=np.zeros(0, int), trace=np.zeros(0, int),
+    empty = dict(rr=np.zeros(0, int), cc=np.zeros(0, int), group=np.zeros(0, int),
                  X=np.zeros((0, len(LOCAL_NAMES))))
     if n == 0:
         return np.zeros(1, np.int64), F, empty
     mask = lab > 0
     skel = skeletonize(mask) if skeleton is None else (np.asarray(skeleton, bool) & mask)
-    trace_of = crack_traces(lab, crack_groups(lab, link_px=link_px), skel)
-    grp = trace_of[lab]
+    group_of = crack_groups(lab, link_px=link_px)
+    grp = group_of[lab]
     rr, cc = np.nonzero(skel)
     g = grp[rr, cc]
-    dist = cv2.distanceTransform(mask.astype(np.uint8), cv2.DIST_L2, cv2.DIST_MASK_PRECISE)
+    dist = cv2.distanceTransform(mask.astype(np.uint8), cv2.DIST_L2, cv2.DIST_MASK_5)
     ap = np.maximum(2.0 * dist[rr, cc] - 1.0, 1.0).astype(np.float64)
     ap_img = np.zeros(lab.shape, np.float64)
     ap_img[rr, cc] = ap
@@ -260,7 +179,8 @@ def crack_morphology(crack_labels, *, image=None, skeleton=None, background=None
         if background is None:
             k = cv2.getStructuringElement(cv2.MORPH_RECT, (BACKGROUND_PX, BACKGROUND_PX))
             background = cv2.morphologyEx(grey, cv2.MORPH_CLOSE, k)
-        core = float(np.percentile(grey[mask], 2)) if crack_level is None else crack_level
+        core = float(crack_level) if crack_level is not None and np.isfinite(crack_level) \
+            else float(np.percentile(grey[mask], 2))
         bg = np.asarray(background, np.float32)[mask]
         dark[mask] = np.clip((bg - grey[mask]) / np.maximum(bg - core, 1e-6), 0, 1)
     sk8 = skel.astype(np.uint8)
@@ -295,7 +215,7 @@ def crack_morphology(crack_labels, *, image=None, skeleton=None, background=None
         return np.bincount(g, weights=v, minlength=m) / np.maximum(cnt, 1)
 
     a1, a2 = gmean(ap), gmean(ap * ap)
-    n_obj = np.bincount(trace_of[1:], minlength=m).astype(np.float64)
+    n_obj = np.bincount(group_of[1:], minlength=m).astype(np.float64)
     F[:, 0] = gmean(np.log(ap))
     F[:, 1] = np.sqrt(np.maximum(a2 - a1 ** 2, 0)) / np.maximum(a1, 1e-9)
     for j, k in ((2, 1), (3, 2), (4, 3), (7, 4)):
@@ -311,4 +231,4 @@ def crack_morphology(crack_labels, *, image=None, skeleton=None, background=None
         F[:, 8] = np.bincount(gm, weights=dark[mask], minlength=m) / np.maximum(
             np.bincount(gm, minlength=m), 1)
     F[cnt == 0] = np.nan
-    return trace_of, F, dict(rr=rr, cc=cc, trace=g, X=L)
+    return group_of, F, dict(rr=rr, cc=cc, group=g, X=L)

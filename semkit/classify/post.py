@@ -14,7 +14,7 @@ import numpy as np
 import pandas as pd
 
 from ..errors import InputError
-from .model import DEFAULT_POST_MODEL, TYPES, out_of_range, trace_design, type_probabilities
+from .model import DEFAULT_POST_MODEL, TYPES, group_design, out_of_range, type_probabilities
 from .morphology import FEATURE_NAMES, crack_morphology
 
 __all__ = ["classify_post", "MIN_SKELETON_PX", "POST_COLUMNS"]
@@ -24,7 +24,7 @@ MIN_SKELETON_PX = 8
 #: columns of the table of :func:`classify_post`, after ``crack_id``.
 POST_COLUMNS = ("type_post", "confidence", "p_tensile", "p_shear", "p_mixed", "type_post_ok",
                 "type_note", "frac_tensile", "frac_shear", "frac_mixed", "tensile_fraction",
-                "trace_id", *FEATURE_NAMES)
+                "group_id", "p_mean", *FEATURE_NAMES)
 
 
 def classify_post(crack_labels, *, image=None, skeleton=None, background=None,
@@ -76,10 +76,10 @@ def classify_post(crack_labels, *, image=None, skeleton=None, background=None,
     ids = np.unique(lab[lab > 0])
     if ids.size == 0:
         return pd.DataFrame(columns=["crack_id", *POST_COLUMNS]), type_img
-    trace_of, F, local = crack_morphology(lab, image=image, skeleton=skeleton,
+    group_of, F, local = crack_morphology(lab, image=image, skeleton=skeleton,
                                           background=background, crack_level=crack_level)
-    groups = np.unique(trace_of[ids])
-    D = trace_design(F, local, model)[groups]
+    groups = np.unique(group_of[ids])
+    D = group_design(F, local, model)[groups]
     Fg = F[groups]
     measured = np.isfinite(Fg[:, 0])
     P = np.full((len(groups), 3), np.nan)
@@ -91,7 +91,7 @@ def classify_post(crack_labels, *, image=None, skeleton=None, background=None,
     notes[short & (notes == "")] = f"skeleton shorter than {MIN_SKELETON_PX} px"
     P[~measured] = 1.0 / 3
     k = P.argmax(axis=1)
-    at = np.searchsorted(groups, trace_of[ids])
+    at = np.searchsorted(groups, group_of[ids])
     kg = k[at]
     code = np.zeros(int(lab.max()) + 1, np.int8)
     code[ids] = kg + 1
@@ -105,7 +105,7 @@ def classify_post(crack_labels, *, image=None, skeleton=None, background=None,
         "p_mixed": pg[:, 2], "type_post_ok": ok, "type_note": notes[at].astype(str),
         "frac_tensile": onehot[:, 0], "frac_shear": onehot[:, 1], "frac_mixed": onehot[:, 2],
         "tensile_fraction": pg[:, 0] / np.maximum(pg[:, 0] + pg[:, 1], 1e-12),
-        "trace_id": trace_of[ids].astype(int), "p_mean": D[at, len(FEATURE_NAMES)]})
+        "group_id": group_of[ids].astype(int), "p_mean": D[at, len(FEATURE_NAMES)]})
     for j, name in enumerate(FEATURE_NAMES):
         table[name] = Fg[at, j]
     return table, type_img

@@ -47,7 +47,9 @@ def classify_stage(cracks, crack_labels, *, grey=None, pixel_size_um=1.0, model=
     lab = np.asarray(crack_labels)
     ids = out["crack_id"].to_numpy() if len(out) else np.zeros(0, int)
     if grey is not None and len(out):
-        a = typed_areas(grey, lab).set_index("crack_id")
+        ok_level = crack_level is not None and np.isfinite(crack_level)
+        a = typed_areas(grey, lab, background=background if ok_level else None,
+                        core=crack_level if ok_level else None).set_index("crack_id")
         out["area_pv_um2"] = a["area_pv_px"].reindex(ids).to_numpy() * pixel_size_um ** 2
     if grain_labels is not None and len(out):
         t, _ = classify_pre(lab, grain_labels)

@@ -1,4 +1,4 @@
-"""Tests of semkit.classify (issue #3): He et al.'s pre-existing rule, post-test typing."""
+"""Tests of semkit.classify (issues #3, 15): He et al.'s pre-existing rule, post-test typing."""
 import numpy as np
 import pandas as pd
 import pytest
@@ -7,27 +7,27 @@ from scipy import ndimage as ndi
 from semkit import config
 from semkit.classify import (
     DEFAULT_POST_MODEL,
-    FEATURE_NAMES,
     INTER_MIN_FRACTION,
     apply_labels,
     classify_post,
     classify_pre,
-    crack_clusters,
     load_model,
     read_labels,
     save_model,
     train_post,
 )
+from semkit.classify.model import STAGE2_NAMES
 from semkit.damage import damage_ratio, typed_areas
 from semkit.errors import InputError
 
 PRE = {"inter": 1, "intra": 2, "trans": 3}
 POST = {"tensile": 1, "shear": 2, "mixed": 3}
-# issue #3 targets: 0.90 for both accuracies, P within 15 % (median). Measured on the
-# held-out seeds 200-211 (docs/semkit_science.md): post accuracy 0.935 by area, median
-# |P error| 0.079 (0.933 and 0.059 on the seeds 200-205 used here): both targets asserted.
+# issue #3 target for pre-existing types: 0.90 by area. Post-test typing (issue 15) is
+# trained on the domain-randomised family of benchmarks/typing/render.py, of which
+# semkit.synth is one part; its accuracy on semkit.synth seeds 200-205 and the P error there
+# are asserted at POST_SYNTH_ACCURACY_MIN and P_MEDIAN_ERROR_MAX (docs/semkit_science.md).
 PRE_AREA_ACCURACY_MIN = config.PRE_TYPE_ACCURACY_MIN
-POST_AREA_ACCURACY_MIN = config.POST_TYPE_ACCURACY_TARGET
+POST_SYNTH_ACCURACY_MIN = config.POST_TYPE_ACCURACY_SYNTH_MIN
 P_MEDIAN_ERROR_MAX = config.P_TOL_MEDIAN
 
 
@@ -108,28 +108,18 @@ def test_classify_post_hand_drawn_tensile_and_shear():
     for c in range(25, 180, 12):
         img[94 + rng.integers(0, 2), c:c + 2] = 30
     img = ndi.gaussian_filter(img, 0.6) + rng.normal(0, 3, img.shape)
-    # objects as the crack pipeline defines them (the model is trained on those): the
-    # en-echelon pieces and their debris are one object. (From a bare threshold, 1-px pieces
-    # 3 px apart stay separate 24-px objects: too short to type reliably on their own.)
     from semkit.analysis import analyse_image
-    a = analyse_image(np.clip(img, 0, 255).astype(np.uint8), pixel_size_um=1.0)
+    a = analyse_image(np.clip(img, 0, 255).astype(np.uint8), pixel_size_um=1.0,
+                      stage="failure")
     lab = a.crack_labels
-    t, types = classify_post(lab, image=a.smooth)
+    t, types = classify_post(lab, image=a.smooth, skeleton=a.skeleton)
     a_t = ((types == 1) & (lab > 0))[20:40].sum() / (lab[20:40] > 0).sum()
     a_s = ((types == 2) & (lab > 0))[80:100].sum() / (lab[80:100] > 0).sum()
     assert a_t > 0.9 and a_s > 0.9, (a_t, a_s)
-    assert t.loc[t.frac_tensile > 0.5, "aperture_mean_px"].min() > 4.0
-
-
-def test_crack_clusters_attach_debris_to_nearest_large_crack():
-    lab = np.zeros((50, 100), np.int32)
-    lab[10:13, 5:95] = 1      # large crack
-    lab[18:20, 40:42] = 2     # speck 5 px away -> joins 1
-    lab[46:48, 40:42] = 3     # speck 14 px away -> alone
-    lab[30:33, 5:95] = 4      # another large crack
-    lab[25:27, 60:62] = 5     # speck nearer to 4 (3 px) than to 1 (12 px)
-    assert crack_clusters(lab).tolist() == [0, 1, 1, 3, 4, 4]
-    assert crack_clusters(lab, link_px=2).tolist() == [0, 1, 2, 3, 4, 5]
+    tensile = t[t.type_post == "tensile"]
+    assert np.exp(tensile["log_aperture"]).min() > 4.0 and tensile.type_post_ok.all()
+    assert (t.p_tensile + t.p_shear + t.p_mixed).round(9).eq(1).all()
+    np.testing.assert_allclose(t.confidence, t[["p_tensile", "p_shear", "p_mixed"]].max(1))
 
 
 def _post_sample(seed):
@@ -149,7 +139,9 @@ def test_classify_post_synthetic_accuracy_and_p():
     for seed in (200, 201, 202, 203, 204, 205):
         s, a, truth = _post_sample(seed)
         lab = a.crack_labels
-        table, types = classify_post(lab, image=a.smooth)
+        th = a.thresholded
+        table, types = classify_post(lab, image=a.smooth, skeleton=a.skeleton,
+                                     background=th.background, crack_level=th.crack_level)
         sel = (truth > 0) & (lab > 0)
         good += (types[sel] == truth[sel]).sum()
         tot += sel.sum()
@@ -158,10 +150,10 @@ def test_classify_post_synthetic_accuracy_and_p():
         p_true = (truth == 1).sum() / (truth == 2).sum()
         p_err.append(abs(p / p_true - 1))
         assert set(table.type_post) <= {"tensile", "shear", "mixed"}
-        assert ((table.confidence >= 0) & (table.confidence <= 1)).all()
+        assert ((table.confidence >= 1 / 3) & (table.confidence <= 1)).all()
         np.testing.assert_allclose(table[["frac_tensile", "frac_shear", "frac_mixed"]].sum(
             axis=1), 1.0, atol=1e-9)
-    assert good / tot >= POST_AREA_ACCURACY_MIN, good / tot
+    assert good / tot >= POST_SYNTH_ACCURACY_MIN, good / tot
     assert np.median(p_err) <= P_MEDIAN_ERROR_MAX, np.round(p_err, 3)
 
 
@@ -191,20 +183,26 @@ def test_train_save_load_and_user_labels(tmp_path):
         s, a, truth = _post_sample(seed)
         lab = a.crack_labels
         samples.append((lab, np.where(lab > 0, truth, 0), a.smooth))
-    model = train_post(samples, seed=0)
-    assert len(model["coef"]) == len(FEATURE_NAMES) == 13 and model["version"] == 2
+    model = train_post(samples[:2], seed=0, calibration=samples[2:])
+    assert model["version"] == 3 and model["features"] == list(STAGE2_NAMES)
+    assert model["temperature"] > 0 and model["n_calibration"] > 0
     save_model(model, tmp_path / "m.json")
     back = load_model(tmp_path / "m.json")
     lab = samples[0][0]
     t1, i1 = classify_post(lab, model=model)
     t2, i2 = classify_post(lab, model=back)
     assert (i1 == i2).all() and t1.type_post.tolist() == t2.type_post.tolist()
+    assert train_post(samples[:2], seed=0)["coef"] == train_post(samples[:2], seed=0)["coef"]
     (tmp_path / "bad.json").write_text('{"coef": [1, 2]}')
     with pytest.raises(InputError, match="bad.json"):
         load_model(tmp_path / "bad.json")
+    old = dict(model, version=2)
+    (tmp_path / "old.json").write_text(__import__("json").dumps(old))
+    with pytest.raises(InputError, match="retrain"):
+        load_model(tmp_path / "old.json")
     with pytest.raises(InputError, match="tensile and shear"):
         train_post([(lab, {1: "tensile"})])
-    # user labels override the model
+    # user labels override the model, with certainty
     cracks = t1.assign(image="a.png")
     first = int(cracks.crack_id.iloc[0])
     labels_csv = tmp_path / "labels.csv"
@@ -212,9 +210,10 @@ def test_train_save_load_and_user_labels(tmp_path):
     out = apply_labels(cracks, read_labels(labels_csv))
     row = out[out.crack_id == first].iloc[0]
     assert row.type_post == "mixed" and row.confidence == 1.0 and row.type_source == "user"
-    assert row.frac_mixed == 1.0 and row.frac_tensile == 0.0
+    assert row.frac_mixed == 1.0 and row.frac_tensile == 0.0 and row.p_mixed == 1.0
+    assert row.type_post_ok and row.type_note == ""
     assert (out[out.crack_id != first].type_source == "model").all()
     pd.DataFrame(dict(image=["a"], crack_id=[1], type=["bogus"])).to_csv(tmp_path / "x.csv")
     with pytest.raises(InputError, match="bogus"):
         read_labels(tmp_path / "x.csv")
-    assert len(DEFAULT_POST_MODEL["coef"]) == len(DEFAULT_POST_MODEL["mean"]) == 13
+    assert DEFAULT_POST_MODEL["version"] == 3 and "seed" in DEFAULT_POST_MODEL

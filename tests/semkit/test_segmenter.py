@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from semkit.errors import InputError
-from semkit.scoring import centreline_scores
+from semkit.evaluate import centreline_scores
 from semkit.segmenter import labels_from_mask, segmenter_features, train_segmenter
 from semkit.segmenter_file import TRUSTED_TYPES, load_segmenter, save_segmenter
 from semkit.synth import make_sem_image

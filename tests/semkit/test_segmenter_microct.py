@@ -12,7 +12,7 @@ import sys
 import numpy as np
 import pytest
 
-from semkit.scoring import centreline_scores
+from semkit.evaluate import centreline_scores
 from semkit.segmenter import labels_from_mask, train_segmenter
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[2] / "benchmarks"))
