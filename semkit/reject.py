@@ -7,6 +7,10 @@ Every cleaned object gets a few measures (:func:`object_evidence`):
   of that side's contrast to the crack core.
   A crack is darker than the rock on both of its sides; the dark rim at the edge of a bright
   grain (a halo, a boundary line) is darker only than the bright side.
+* ``encloses_px``, ``hole_lift`` — area of the holes the object closes around, and how much
+  brighter they are than the darker side outside (share of the contrast): a ring around a
+  brighter grain is that grain's rim (a halo), however long; a crack network closing around a
+  grain of the same rock is not lifted.
 * ``elongation`` — sqrt of the ratio of the principal second moments (1 for a disc).
 * ``width_px`` — mean width, area over skeleton length; ``slenderness`` — skeleton length
   over mean width (a curved crack is slender even when its moments are not elongated).
@@ -43,8 +47,12 @@ RULES = (
     ("phase_rim", lambda e: (e.side_depth < config.REJECT_SIDE_DEPTH)
      & (e.slenderness < config.REJECT_RIM_MAX_SLENDERNESS)
      & (e.width_px >= config.REJECT_RIM_MIN_WIDTH_PX)),
+    ("grain_rim", lambda e: (e.encloses_px >= config.REJECT_RIM_LOOP_PX)
+     & (e.hole_lift >= config.REJECT_RIM_HOLE_LIFT)
+     & (e.side_depth < config.REJECT_ZONE_MAX_DEPTH)),
     ("compact_dark", lambda e: (e.slenderness < config.REJECT_COMPACT_SLENDERNESS)
-     & (e.width_px >= config.REJECT_COMPACT_WIDTH_PX)),
+     & (e.width_px >= config.REJECT_COMPACT_WIDTH_PX)
+     & (e.side_depth < config.REJECT_ZONE_MAX_DEPTH)),
     ("dark_phase", lambda e: (e.background_rel < config.REJECT_DARK_BACKGROUND)
      & (e.side_depth < config.REJECT_ZONE_MAX_DEPTH)),
     ("mottled", lambda e: (e.background_rel < config.REJECT_MOTTLED_BACKGROUND)
@@ -107,10 +115,11 @@ def object_evidence(labels, n, grey, *, crack_level, noise, skeleton=None, regio
     Returns
     -------
     evidence : pandas.DataFrame
-        Index 1..n: ``area_px, side_depth, elongation, width_px, slenderness, background_rel,
-        density, neighbours, texture``.
+        Index 1..n: ``area_px, side_depth, encloses_px, hole_lift, elongation, width_px,
+        slenderness, background_rel, density, neighbours, texture``.
     """
     import cv2
+    from scipy import ndimage as ndi
 
     from .measure import object_moments
     lab = np.asarray(labels)
@@ -140,6 +149,19 @@ def object_evidence(labels, n, grey, *, crack_level, noise, skeleton=None, regio
     dens = cv2.blur((lab > 0).astype(np.float32), (config.ZONE_WINDOW_PX,) * 2)
     background_rel = _label_percentiles(rel[on], lab_on, n, (50.0,))[0][0]
     density = _label_percentiles(dens[on], lab_on, n, (50.0,))[0][0]
+    # holes closed by an object (owner: the largest label next to the hole)
+    holes = ndi.binary_fill_holes(lab > 0) & (lab == 0)
+    encloses = np.zeros(n + 1)
+    hole_grey = np.full(n + 1, np.nan)
+    if holes.any():
+        nh, hl = cv2.connectedComponents(holes.view(np.uint8), connectivity=4)
+        grown = cv2.dilate(lab.astype(np.float32), np.ones((3, 3), np.uint8)).astype(np.int64)
+        owner = np.zeros(nh, np.int64)
+        np.maximum.at(owner, hl[holes], grown[holes])
+        encloses = np.bincount(owner[1:], weights=np.bincount(hl[holes], minlength=nh)[1:],
+                               minlength=n + 1)[:n + 1]
+        hole_grey = _label_percentiles(g[holes], owner[hl[holes]], n, (50.0,))[0][0]
+    hole_lift = (hole_grey - ring_lo) / np.maximum(ring_lo - float(crack_level), 1e-3)
     # other objects (>= 5 px) whose centre lies in the window around this one's centre
     counts = np.zeros(lab.shape, np.float32)
     big = np.flatnonzero(area[1:] >= 5) + 1
@@ -151,7 +173,9 @@ def object_evidence(labels, n, grey, *, crack_level, noise, skeleton=None, regio
     neighbours = counts[np.clip(np.rint(cy).astype(int), 0, lab.shape[0] - 1),
                         np.clip(np.rint(cx).astype(int), 0, lab.shape[1] - 1)] - (area >= 5)
     texture = ring_sd / max(float(noise), 1e-6)
-    ev = pd.DataFrame(dict(area_px=area, side_depth=side_depth, elongation=elong, width_px=width,
+    ev = pd.DataFrame(dict(area_px=area, side_depth=side_depth, encloses_px=encloses,
+                           hole_lift=hole_lift,
+                           elongation=elong, width_px=width,
                            slenderness=sk / np.maximum(width, 1e-9),
                            background_rel=background_rel, density=density,
                            neighbours=neighbours, texture=texture),
