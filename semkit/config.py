@@ -212,18 +212,22 @@ RIDGE_CLOSING_PX = 9
 
 # --- rejection of dark non-crack objects (semkit.reject) ---
 #: a crack lies at least this far (share of the contrast) below the darker side around it
-REJECT_SIDE_DEPTH = 0.12
+REJECT_SIDE_DEPTH = 0.3
 #: ... unless it is a long line (a blurred 1-px crack is shallow but slender): skeleton length
 #: over mean width at least this
 REJECT_RIM_MAX_SLENDERNESS = 12.0
+#: a rim around a brighter grain: closes a loop around at least this many px, brighter than
+#: the darker side outside by this share of the contrast (and not reaching the crack core)
+REJECT_RIM_LOOP_PX = 20
+REJECT_RIM_HOLE_LIFT = 0.3
 #: ... and at least this wide (a blurred thin crack is shallow; its depth says little)
 REJECT_RIM_MIN_WIDTH_PX = 2.5
 #: objects smaller than this (px) are not judged: too few pixels for their statistics
 REJECT_MIN_AREA_PX = 30
-#: compact dark phase (biotite, opaque, pore): skeleton length under this many mean widths,
-#: and at least this wide
+#: compact dark phase (biotite, opaque mineral): skeleton length under this many mean widths,
+#: at least this wide, and not reaching the crack core grey (an open void does: a pore)
 REJECT_COMPACT_SLENDERNESS = 3.0
-REJECT_COMPACT_WIDTH_PX = 15.0
+REJECT_COMPACT_WIDTH_PX = 6.0
 #: dark phase: the object's local background is below this share of the rock's (both from
 #: the crack core grey)
 REJECT_DARK_BACKGROUND = 0.4
@@ -233,7 +237,8 @@ REJECT_MOTTLED_BACKGROUND = 0.8
 REJECT_MOTTLED_DENSITY = 0.15
 #: ... and with at least this many other objects centred in the window around it
 REJECT_MOTTLED_NEIGHBOURS = 4
-#: ... unless the object's core reaches this share of the crack contrast (an open crack)
+#: an object whose dark core reaches this share of the crack contrast is an open crack or
+#: void: the dark-phase, mottled, compact and grain-rim rules never reject it
 REJECT_ZONE_MAX_DEPTH = 0.85
 #: side of the grey closing giving an object's local background (fills cracks narrower), px
 ZONE_CLOSING_PX = 21
