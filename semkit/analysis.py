@@ -94,26 +94,12 @@ class CrackAnalysis:
 
     # stage 1b: SEM data bar (cropped) and its scale bar
     def _crop_data_bar(self):
-        from .databar import find_data_bar, read_scale_bar
-        img = self.raw_image
-        bar = find_data_bar(img)
-        self.image = img
-        if bar is None:
-            return
-        self.data_bar = bar
-        self.image = np.ascontiguousarray(img[bar.row1:] if bar.side == "top" else img[:bar.row0])
-        sb = read_scale_bar(img, bar)
-        self.scale_bar = sb
-        if sb is None or not np.isfinite(sb.length_um):
-            if sb is not None:
-                self.pixel_size_note = f"scale bar label unreadable ({sb.text!r})"
-            return
-        px = sb.pixel_size_um
-        if self.pixel_size_source == "default":
-            self.pixel_size_um, self.pixel_size_source = px, "scale_bar"
-        elif abs(px / self.pixel_size_um - 1) > config.SCALEBAR_AGREE_FRACTION:
-            self.pixel_size_note = (f"scale bar ({sb.text.strip()} over {sb.length_px:.0f} px) "
-                                    f"gives {px:.4g} um/px, not {self.pixel_size_um:.4g}")
+        from .databar import crop_data_bar
+        c = crop_data_bar(self.raw_image, pixel_size_um=self.pixel_size_um,
+                          pixel_size_source=self.pixel_size_source)
+        self.image, self.data_bar, self.scale_bar = c.image, c.bar, c.scale_bar
+        self.pixel_size_um, self.pixel_size_source = c.pixel_size_um, c.pixel_size_source
+        self.pixel_size_note = c.note
 
     # stage 1c: sample region
     @functools.cached_property
@@ -192,18 +178,8 @@ class CrackAnalysis:
             t = self.thresholded
             det, area = t.detect_mask, t.mask
             if self.ridge is not None:
-                # ridge lines add cracks the threshold missed; lines touching a threshold
-                # object are left out, so the threshold's objects keep their shape
-                import cv2
-                rm, depth = self.ridge
-                n, lab = cv2.connectedComponents(rm.view(np.uint8), connectivity=8)
-                near = cv2.dilate(det.view(np.uint8), np.ones((3, 3), np.uint8)).view(bool)
-                touch = np.zeros(n, bool)
-                touch[lab[near & rm]] = True
-                touch[0] = True
-                new = ~touch[lab]
-                det = det | new
-                area = area | (new & (depth >= config.AUTO_AREA_FRACTION))
+                from .ridge import add_ridge_lines
+                det, area = add_ridge_lines(det, area, *self.ridge)
         inside = self.region.mask
         return det & inside, area & inside
 

@@ -24,7 +24,8 @@ import numpy as np
 
 from . import config
 
-__all__ = ["DataBar", "ScaleBar", "find_data_bar", "read_scale_bar"]
+__all__ = ["DataBar", "ScaleBar", "DataBarCrop", "find_data_bar", "read_scale_bar",
+           "crop_data_bar"]
 
 _GLYPHS = "0123456789.µmnu"
 _GLYPH_SIZE = (24, 16)  # rows, cols of the normalised glyph
@@ -54,6 +55,18 @@ class ScaleBar:
     @property
     def pixel_size_um(self):
         return self.length_um / self.length_px if self.length_px > 0 else float("nan")
+
+
+@dataclasses.dataclass
+class DataBarCrop:
+    """An image without its data bar, and the pixel size after reading the scale bar."""
+
+    image: np.ndarray
+    bar: DataBar | None
+    scale_bar: ScaleBar | None
+    pixel_size_um: float
+    pixel_size_source: str
+    note: str = ""          #: why the scale bar was not used, or how it disagrees
 
 
 def _to_u8(image):
@@ -303,3 +316,39 @@ def read_scale_bar(image, bar):
             length_um = float("nan")
     return ScaleBar(length, text, length_um, conf,
                     (bar.row0 + y0, x0, bar.row0 + y0 + h, x0 + w))
+
+
+def crop_data_bar(image, *, pixel_size_um, pixel_size_source):
+    """Crop the data bar and take the pixel size from its scale bar when none was known.
+
+    Parameters
+    ----------
+    image : (M, N) ndarray
+    pixel_size_um : float
+    pixel_size_source : str
+        Where ``pixel_size_um`` came from; only ``default`` is replaced by the scale bar
+        (source ``scale_bar``). A given pixel size is kept, and a scale bar disagreeing by more
+        than ``SCALEBAR_AGREE_FRACTION`` is said in ``note``.
+
+    Returns
+    -------
+    crop : DataBarCrop
+    """
+    bar = find_data_bar(image)
+    if bar is None:
+        return DataBarCrop(image, None, None, pixel_size_um, pixel_size_source)
+    img = np.ascontiguousarray(image[bar.row1:] if bar.side == "top" else image[:bar.row0])
+    sb = read_scale_bar(image, bar)
+    out = DataBarCrop(img, bar, sb, pixel_size_um, pixel_size_source)
+    if sb is None:
+        return out
+    if not np.isfinite(sb.length_um):
+        out.note = f"scale bar label unreadable ({sb.text!r})"
+        return out
+    px = sb.pixel_size_um
+    if pixel_size_source == "default":
+        out.pixel_size_um, out.pixel_size_source = px, "scale_bar"
+    elif abs(px / pixel_size_um - 1) > config.SCALEBAR_AGREE_FRACTION:
+        out.note = (f"scale bar ({sb.text.strip()} over {sb.length_px:.0f} px) gives "
+                    f"{px:.4g} um/px, not {pixel_size_um:.4g}")
+    return out

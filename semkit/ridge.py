@@ -24,7 +24,7 @@ import numpy as np
 
 from . import config
 
-__all__ = ["ridge_response", "ridge_mask"]
+__all__ = ["ridge_response", "ridge_mask", "add_ridge_lines"]
 
 
 def _add_scale(img, sigma, kappa, out):
@@ -140,3 +140,33 @@ def ridge_mask(image, *, crack_level, region=None, sigmas=config.RIDGE_SIGMAS_PX
     keep[lab[seed]] = True
     keep[0] = False
     return keep[lab], depth.astype(np.float32)
+
+
+def add_ridge_lines(detect, area, ridge, depth):
+    """Fuse ridge lines with a threshold's masks: lines the threshold missed become cracks.
+
+    Ridge lines touching a threshold object are left out, so the threshold's objects keep
+    their shape (and measured width); the others are added to the detect mask, and to the area
+    mask where they are at least ``AUTO_AREA_FRACTION`` deep (thin ones are measured by partial
+    volume later).
+
+    Parameters
+    ----------
+    detect, area : (M, N) ndarray of bool
+        The threshold's detect and area masks.
+    ridge : (M, N) ndarray of bool
+    depth : (M, N) ndarray of float32
+        :func:`ridge_mask` outputs.
+
+    Returns
+    -------
+    detect, area : (M, N) ndarray of bool
+    """
+    import cv2
+    n, lab = cv2.connectedComponents(ridge.view(np.uint8), connectivity=8)
+    near = cv2.dilate(detect.view(np.uint8), np.ones((3, 3), np.uint8)).view(bool)
+    touch = np.zeros(n, bool)
+    touch[lab[near & ridge]] = True
+    touch[0] = True
+    new = ~touch[lab]
+    return detect | new, area | (new & (depth >= config.AUTO_AREA_FRACTION))
