@@ -152,6 +152,13 @@ GRAIN_COUNT_TOL = 0.10
 #: crack-type accuracy by crack area (pre-existing with a known grain map; post-test).
 PRE_TYPE_ACCURACY_MIN = 0.90
 POST_TYPE_ACCURACY_TARGET = 0.90
+#: floor the tests assert for the built-in post-test model on semkit.synth seeds 200-205
+#: (held out): it is fitted on the wider domain-randomised family of benchmarks/typing, of
+#: which semkit.synth is one part, and does not reach the 0.90 target there
+#: (docs/semkit_science.md quotes the measured value).
+POST_TYPE_ACCURACY_SYNTH_MIN = 0.75
+#: calibration: |mean confidence - observed accuracy| of crack groups (area-weighted).
+POST_CALIBRATION_GAP_MAX = 0.10
 #: per-image P against truth, median relative error.
 P_TOL_MEDIAN = 0.15
 # --- end issue #3 ---------------------------------------------------------------------------

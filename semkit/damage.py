@@ -141,7 +141,7 @@ def image_damage(cracks, *, mixed="exclude", area_column=None):
 def _confidence(out, c, area, mixed):
     """P_low, P_high, P_note and the low_confidence status (semkit.damage_confidence)."""
     from .damage_confidence import p_confidence
-    prob = c[["p_tensile", "p_shear", "p_mixed"]].to_numpy(float)
+    prob = c[["p_tensile", "p_shear", "p_mixed"]].to_numpy(float, copy=True)
     if "type_source" in c.columns:  # user labels are certain
         user = (c["type_source"] == "user").to_numpy()
         kinds = c["type_post"].astype(str).to_numpy()
@@ -150,7 +150,7 @@ def _confidence(out, c, area, mixed):
     trusted = c["type_post_ok"].fillna(True).astype(bool).to_numpy() \
         if "type_post_ok" in c.columns else np.ones(len(c), bool)
     if "type_source" in c.columns:
-        trusted |= (c["type_source"] == "user").to_numpy()
+        trusted = trusted | (c["type_source"] == "user").to_numpy()
     cols = {k: [] for k in ("P_low", "P_high", "P_note")}
     for img, status in zip(out["image"], out["P_status"]):
         sel = (c["image"] == img).to_numpy()

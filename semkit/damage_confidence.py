@@ -63,7 +63,7 @@ def p_confidence(area, prob, *, trusted=None, group=None, mixed="exclude",
     tensile_fraction : (n,) array_like of float, optional
         Tensile share of a mixed crack (``mixed="split"``).
     notes : (n,) array_like of str, optional
-        ``type_note`` of each crack (the most common one of untrusted cracks is quoted).
+        ``type_note`` of each crack (that of the largest untrusted crack is quoted).
 
     Returns
     -------
@@ -108,10 +108,12 @@ def p_confidence(area, prob, *, trusted=None, group=None, mixed="exclude",
     reasons = []
     untrusted = float(area[~trusted].sum() / area.sum())
     if untrusted > UNTRUSTED_AREA_MAX:
-        bad = [s for s in (notes if notes is not None else []) if s]
-        common = max(set(bad), key=bad.count) if bad else ""
+        main = ""
+        if notes is not None:  # the reason of the largest untrusted crack
+            bad = np.flatnonzero(~trusted & (np.asarray(notes, dtype=object) != ""))
+            main = str(notes[bad[np.argmax(area[bad])]]) if bad.size else ""
         reasons.append(f"cracks untyped by the model hold {untrusted:.0%} of the typed area"
-                       + (f" (e.g. {common})" if common else ""))
+                       + (f" (largest: {main})" if main else ""))
     if no_shear > _NO_SHEAR_DRAWS_MAX:
         reasons.append(f"no shear area in {no_shear:.0%} of the type draws")
     elif lo > 0 and hi / lo > P_SPREAD_MAX:

@@ -1,4 +1,6 @@
 """Tests of semkit.classify (issues #3, 15): He et al.'s pre-existing rule, post-test typing."""
+import functools
+
 import numpy as np
 import pandas as pd
 import pytest
@@ -16,19 +18,27 @@ from semkit.classify import (
     save_model,
     train_post,
 )
-from semkit.classify.model import STAGE2_NAMES
-from semkit.damage import damage_ratio, typed_areas
+from semkit.classify.model import (
+    STAGE2_NAMES,
+    _group_rows,
+    calibrate,
+    image_samples,
+    type_probabilities,
+)
+from semkit.damage import typed_areas
 from semkit.errors import InputError
 
 PRE = {"inter": 1, "intra": 2, "trans": 3}
 POST = {"tensile": 1, "shear": 2, "mixed": 3}
 # issue #3 target for pre-existing types: 0.90 by area. Post-test typing (issue 15) is
 # trained on the domain-randomised family of benchmarks/typing/render.py, of which
-# semkit.synth is one part; its accuracy on semkit.synth seeds 200-205 and the P error there
-# are asserted at POST_SYNTH_ACCURACY_MIN and P_MEDIAN_ERROR_MAX (docs/semkit_science.md).
+# semkit.synth is one part; its accuracy on semkit.synth seeds 200-205 is asserted at
+# POST_SYNTH_ACCURACY_MIN, P within P_MEDIAN_ERROR_MAX or flagged (docs/semkit_science.md).
 PRE_AREA_ACCURACY_MIN = config.PRE_TYPE_ACCURACY_MIN
 POST_SYNTH_ACCURACY_MIN = config.POST_TYPE_ACCURACY_SYNTH_MIN
 P_MEDIAN_ERROR_MAX = config.P_TOL_MEDIAN
+CALIBRATION_GAP_MAX = config.POST_CALIBRATION_GAP_MAX
+HELD_OUT_SEEDS = (200, 201, 202, 203, 204, 205)
 
 
 def _grain_map():
@@ -119,24 +129,27 @@ def test_classify_post_hand_drawn_tensile_and_shear():
     tensile = t[t.type_post == "tensile"]
     assert np.exp(tensile["log_aperture"]).min() > 4.0 and tensile.type_post_ok.all()
     assert (t.p_tensile + t.p_shear + t.p_mixed).round(9).eq(1).all()
-    np.testing.assert_allclose(t.confidence, t[["p_tensile", "p_shear", "p_mixed"]].max(1))
+    np.testing.assert_allclose(t.confidence, t[["p_tensile", "p_shear", "p_mixed"]].max(axis=1))
 
 
+@functools.lru_cache(maxsize=None)
 def _post_sample(seed):
     """A post-test synthetic image analysed by the crack pipeline: (synth, analysis, truth)."""
     synth = pytest.importorskip("semkit.synth")
     from semkit.analysis import analyse_image
     s = synth.make_sem_image((384, 512), stage="post", n_cracks=12, seed=seed)
-    a = analyse_image(s.image, pixel_size_um=s.pixel_size_um)
+    a = analyse_image(s.image, pixel_size_um=s.pixel_size_um, stage="failure")
     code = np.zeros(len(s.cracks) + 1, int)
     code[s.cracks.crack_id] = [POST[x] for x in s.cracks.type_post]
     return s, a, code[s.crack_labels]
 
 
 def test_classify_post_synthetic_accuracy_and_p():
-    good = tot = 0
-    p_err = []
-    for seed in (200, 201, 202, 203, 204, 205):
+    """Type accuracy by area on held-out semkit.synth images, and the issue-15 rule for P:
+    within 15 % of the truth or flagged low_confidence, never a confident P off by more than
+    2x; the typing's 10-90 % P band holds the true P in at least 4 of the 6 images."""
+    good = tot = covered = 0
+    for seed in HELD_OUT_SEEDS:
         s, a, truth = _post_sample(seed)
         lab = a.crack_labels
         th = a.thresholded
@@ -145,16 +158,55 @@ def test_classify_post_synthetic_accuracy_and_p():
         sel = (truth > 0) & (lab > 0)
         good += (types[sel] == truth[sel]).sum()
         tot += sel.sum()
-        areas = typed_areas(a.smooth, lab, types)
-        p = damage_ratio(areas.area_T_px.sum(), areas.area_S_px.sum())
-        p_true = (truth == 1).sum() / (truth == 2).sum()
-        p_err.append(abs(p / p_true - 1))
         assert set(table.type_post) <= {"tensile", "shear", "mixed"}
         assert ((table.confidence >= 1 / 3) & (table.confidence <= 1)).all()
         np.testing.assert_allclose(table[["frac_tensile", "frac_shear", "frac_mixed"]].sum(
             axis=1), 1.0, atol=1e-9)
+        row = a.summary()
+        p_true = (truth == 1).sum() / (truth == 2).sum()
+        err = row["P"] / p_true - 1
+        assert abs(err) <= P_MEDIAN_ERROR_MAX or row["P_status"] == "low_confidence", (
+            seed, err, row["P_status"])
+        assert row["P_status"] != "ok" or 0.5 <= row["P"] / p_true <= 2, (seed, err)
+        covered += row["P_low"] <= p_true <= row["P_high"]
     assert good / tot >= POST_SYNTH_ACCURACY_MIN, good / tot
-    assert np.median(p_err) <= P_MEDIAN_ERROR_MAX, np.round(p_err, 3)
+    assert covered >= 4, covered
+
+
+def _groups(seeds):
+    """Crack groups of analysed held-out images with their true majority type."""
+    out = []
+    for seed in seeds:
+        _, a, truth = _post_sample(seed)
+        th = a.thresholded
+        out.append(image_samples(a.crack_labels, truth, image=a.smooth, skeleton=a.skeleton,
+                                 background=th.background, crack_level=th.crack_level))
+    return out
+
+
+def test_post_probabilities_are_calibrated():
+    """The built-in model's confidence matches the observed accuracy on images it was not
+    fitted or calibrated on (semkit.synth seeds 200-205: crack groups, weighted by area),
+    overall and among the groups below and above 0.8; and the temperature fit undoes a
+    model made 4x overconfident."""
+    samples = _groups(HELD_OUT_SEEDS)
+    D, y, area = _group_rows(samples, DEFAULT_POST_MODEL)
+    P = type_probabilities(D, DEFAULT_POST_MODEL)
+    conf, hit = P.max(axis=1), (P.argmax(axis=1) == y).astype(float)
+    for sel in (conf > 0, conf < 0.8, conf >= 0.8):
+        gap = np.average(conf[sel], weights=area[sel]) - np.average(hit[sel],
+                                                                     weights=area[sel])
+        assert sel.sum() >= 10 and abs(gap) <= CALIBRATION_GAP_MAX, (sel.sum(), gap)
+    base = calibrate(dict(DEFAULT_POST_MODEL), samples)["temperature"]
+    sharp = dict(DEFAULT_POST_MODEL, temperature=1.0,
+                 coef=(4 * np.asarray(DEFAULT_POST_MODEL["coef"])).tolist(),
+                 intercept=(4 * np.asarray(DEFAULT_POST_MODEL["intercept"])).tolist())
+    before = type_probabilities(D, sharp)
+    fitted = calibrate(dict(sharp), samples)
+    assert fitted["temperature"] == pytest.approx(4 * base, rel=0.02)
+    after = type_probabilities(D, fitted)
+    nll = [-np.mean(np.log(q[np.arange(len(y)), y])) for q in (before, after)]
+    assert nll[1] < nll[0], nll
 
 
 def test_typed_areas_partial_volume_unbiased_for_thin_lines():
