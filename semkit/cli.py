@@ -233,7 +233,8 @@ def _run_classify(args):
     model = train_from_folder(args.folder, read_labels(args.train),
                               pixel_size_um=args.pixel_size_um, seed=args.seed)
     save_model(model, args.out)
-    print(f"wrote crack model to {args.out} ({len(model['trace_coef'])} trace-model terms)")
+    print(f"wrote crack model to {args.out} ({model['n_groups']} crack groups, "
+          f"{'/'.join(map(str, model['n_per_type']))} tensile/shear/mixed)")
     return 0
 
 
