@@ -12,7 +12,7 @@
   dark-grain pixels called crack; share of each marked faint crack's polyline within 3 px of a
   detected crack (found: >= 70 % of its length).
 
-Writes ``benchmarks/results/real_images.json`` and prints markdown tables.
+Writes ``benchmarks/semkit_results/real_images.json`` and prints markdown tables.
 
 Run: ``python benchmarks/real_images.py [--shared PATH]`` (default ``../shared/real_sem`` beside
 the repository, or ``$ROCKKIT_SHARED``).
@@ -115,7 +115,7 @@ def granite_scores(folder, marks=MARKS, **options):
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--shared", default=None, help="the real_sem folder")
-    ap.add_argument("--out", default=str(ROOT / "benchmarks" / "results"))
+    ap.add_argument("--out", default=str(ROOT / "benchmarks" / "semkit_results"))
     args = ap.parse_args(argv)
     base = shared_dir(args.shared)
     if not base.is_dir():

@@ -22,7 +22,7 @@ for the typed post-test images P = A_T / A_S (median |error|, largest, and how m
 are flagged ``low_confidence`` or not ``ok``). ImageJ's thesis macro (rolling ball + Otsu +
 skeleton) is quoted at 3.2 MP/s, measured on the same kind of folder; it is not run here.
 
-Writes ``benchmarks/results/sem_pipeline.json`` and prints a markdown table.
+Writes ``benchmarks/semkit_results/sem_pipeline.json`` and prints a markdown table.
 
 Run: ``python benchmarks/sem_pipeline.py [--jobs 2] [--quick]``
 """
@@ -91,7 +91,7 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--quick", action="store_true", help="8 small + 4 large images")
-    ap.add_argument("--out", default=str(pathlib.Path(__file__).parent / "results"))
+    ap.add_argument("--out", default=str(pathlib.Path(__file__).parent / "semkit_results"))
     args = ap.parse_args(argv)
     sizes = SIZES[:8] + SIZES[20:24] if args.quick else SIZES
     tmp = pathlib.Path(tempfile.mkdtemp(prefix="semkit_bench_"))
