@@ -120,7 +120,7 @@ def _scene(opening_px):
 
 
 def test_analysis_flags_a_crack_unlike_the_training_family():
-    """End to end: a 12-px opening (the training family's openings reach about 9 px) is typed
+    """End to end: a 12-px opening (the trained log-aperture range ends near 10 px) is typed
     but not trusted, its note names the feature, and the image's P is low_confidence with a
     note naming it, rather than a number printed as if fine."""
     from semkit.analysis import analyse_image
