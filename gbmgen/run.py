@@ -147,16 +147,11 @@ def run(images_dir="sample_images", out="gbmgen_run", *, minerals=DEFAULT_MINERA
     sem.mkdir(parents=True, exist_ok=True)
     timing = {}
     t0 = time.perf_counter()
-    if cracks:
-        from semkit.pipeline import analyse_folder
-        analyse_folder(images_dir, sem, jobs=jobs, progress=progress,
-                       pixel_size_um=pixel_size_um, classes=classes)
-        timing["semkit_cracks"] = time.perf_counter() - t0
-    t0 = time.perf_counter()
-    from semkit.grains import analyse_grains_folder
-    analyse_grains_folder(images_dir, sem, minerals=minerals, classes=classes,
-                          pixel_size_um=pixel_size_um, progress=progress, seed=seed)
-    timing["semkit_grains"] = time.perf_counter() - t0
+    from semkit.workflow import analyse_folder  # one semkit pass per image: cracks and grains
+    analyse_folder(images_dir, sem, jobs=jobs, progress=progress, pixel_size_um=pixel_size_um,
+                   classes=classes, seed=seed, grains=True, minerals=minerals,
+                   crack_tables=cracks)
+    timing["semkit"] = time.perf_counter() - t0
     table_path = sem / "grains.csv"
     if not table_path.exists():
         raise InputError(f"{table_path}: semkit wrote no grain-size table")

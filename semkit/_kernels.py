@@ -425,3 +425,101 @@ def fill_background(img, known, rows, cols, n_rings, band, out):
             break
     n_left = n_act
     return n_left
+
+
+@njit
+def ridge_strength(dxx, dyy, dxy, gx, gy, s2, ks, out):
+    """Dark-ridge strength from Hessian and gradient images, maxed into ``out`` in place.
+
+    Parameters
+    ----------
+    dxx, dyy, dxy, gx, gy : (M, N) float32
+        Second and first derivatives of the Gaussian-smoothed image.
+    s2 : float
+        sigma^2 (scale normalisation of the Hessian term).
+    ks : float
+        kappa * sigma (weight of the gradient term).
+    out : (M, N) float32
+        Running maximum over scales; ``max(out, s2 (l1 - |l2|) - ks |grad|, 0)`` is written.
+    """
+    h, w = dxx.shape
+    for i in range(h):
+        for j in range(w):
+            a = dxx[i, j]
+            b = dyy[i, j]
+            c = dxy[i, j]
+            half = 0.5 * (a + b)
+            disc = math.sqrt(0.25 * (a - b) * (a - b) + c * c)
+            l2 = half - disc
+            r = s2 * (half + disc - abs(l2)) - ks * math.sqrt(gx[i, j] * gx[i, j]
+                                                               + gy[i, j] * gy[i, j])
+            if r > out[i, j]:
+                out[i, j] = r
+
+
+@njit
+def skeleton_window_sums(skel, aperture, mask, ends, dark, rr, cc, half, out):
+    """Sums over the (2 half + 1)^2 box around each skeleton pixel, written in place.
+
+    Parameters
+    ----------
+    skel : (M, N) uint8
+        Skeleton (1) of the crack mask.
+    aperture : (M, N) float64
+        Aperture at skeleton pixels (anything elsewhere).
+    mask : (M, N) uint8
+        Crack mask (1).
+    ends : (M, N) uint8
+        Skeleton end points (1).
+    dark : (M, N) float64
+        Partial-volume darkness at mask pixels (anything elsewhere).
+    rr, cc : (K,) int64
+        The skeleton pixels.
+    half : int
+    out : (K, 11) float64
+        Per skeleton pixel: number of skeleton pixels in the box, sums of their dx, dy,
+        dx^2, dy^2, dx dy (offsets from the centre pixel, px), of their aperture and squared
+        aperture, the number of mask pixels, the number of end points and the summed
+        darkness of the mask pixels in the box.
+
+    Notes
+    -----
+    Checks nothing; the box is clipped at the image edge.
+    """
+    h, w = skel.shape
+    for k in range(rr.shape[0]):
+        i, j = rr[k], cc[k]
+        s0 = sx = sy = sxx = syy = sxy = sa = saa = sm = se = sd = 0.0
+        for di in range(-half, half + 1):
+            ii = i + di
+            if ii < 0 or ii >= h:
+                continue
+            for dj in range(-half, half + 1):
+                jj = j + dj
+                if jj < 0 or jj >= w:
+                    continue
+                if mask[ii, jj]:
+                    sm += 1.0
+                    sd += dark[ii, jj]
+                if skel[ii, jj]:
+                    a = aperture[ii, jj]
+                    s0 += 1.0
+                    sx += dj
+                    sy += di
+                    sxx += dj * dj
+                    syy += di * di
+                    sxy += di * dj
+                    sa += a
+                    saa += a * a
+                    se += ends[ii, jj]
+        out[k, 0] = s0
+        out[k, 1] = sx
+        out[k, 2] = sy
+        out[k, 3] = sxx
+        out[k, 4] = syy
+        out[k, 5] = sxy
+        out[k, 6] = sa
+        out[k, 7] = saa
+        out[k, 8] = sm
+        out[k, 9] = se
+        out[k, 10] = sd

@@ -1,4 +1,4 @@
-"""``semkit`` command line: a thin argparse layer over :mod:`semkit.pipeline` (no maths here).
+"""``semkit`` command line: a thin argparse layer over :mod:`semkit.workflow` (no maths here).
 
 Exit status: 0 all images analysed; 1 the batch finished but some images failed (a one-line
 summary on stderr, details in ``images.csv``); 2 bad input (bad flag value, missing folder,
@@ -16,9 +16,8 @@ __all__ = ["main", "build_parser"]
 #: keys a --config YAML file may set (the API keywords of analyse_folder)
 _ANALYSE_KEYS = ("threshold", "flatten", "denoise_sigma_px", "despeckle", "min_area_um2",
                  "max_hole_px", "length", "exclude_pores", "pixel_size_um", "jobs", "progress",
-                 "overlays",
-                 # --- issue #3 ---
-                 "classify", "crack_model", "grains", "minerals", "classes", "labels")
+                 "overlays", "classify", "crack_model", "grains", "minerals", "classes",
+                 "labels", "roi", "ridge", "reject", "save_masks", "segmenter")
 
 
 def _version():
@@ -62,7 +61,21 @@ def _add_analyse(sub):
     p.add_argument("--no-progress", dest="progress", action="store_false", default=None,
                    help="no progress bar")
     p.add_argument("--config", metavar="FILE.yaml", help="options from YAML (flags win)")
-    # --- issue #3: crack types, P, grains (docs/semkit_science.md) ---
+    # crack types, P, grains (docs/semkit_science.md)
+    p.add_argument("--roi", default=None, metavar="auto|none|MASK.png",
+                   help="sample region: auto (default: crop the SEM data bar, drop a black or "
+                        "white surround), none, or a mask image (non-zero = sample)")
+    p.add_argument("--no-ridge", dest="ridge", action="store_false", default=None,
+                   help="threshold only (no ridge detector for thin, faint cracks)")
+    p.add_argument("--no-reject", dest="reject", action="store_false", default=None,
+                   help="keep dark objects the shape and surroundings rules would reject")
+    p.add_argument("--save-masks", dest="save_masks", action="store_true", default=None,
+                   help="write masks/<stem>_cracks.png (0/255) and masks/<stem>_labels.png")
+    p.add_argument("--segmenter", default=None, metavar="SEG.skops",
+                   help="trained pixel classifier used instead of threshold and ridge")
+    p.add_argument("--classify", dest="classify", action="store_true", default=None,
+                   help="type tensile/shear/mixed on every image (default: only on loaded "
+                        "stages of manifest.csv)")
     p.add_argument("--no-classify", dest="classify", action="store_false", default=None,
                    help="skip tensile/shear/mixed typing (then no P)")
     p.add_argument("--crack-model", default=None, metavar="MODEL.json",
@@ -77,7 +90,6 @@ def _add_analyse(sub):
     p.add_argument("--classes", default=None, metavar="E1,E2",
                    help="grain-size class edges fine/medium,medium/coarse in µm (default: "
                         "10th/90th count percentiles per mineral)")
-    # --- end issue #3 ---
     p.set_defaults(run=_run_analyse)
 
 
@@ -95,7 +107,8 @@ def build_parser():
     sub = ap.add_subparsers(dest="command", metavar="COMMAND")
     _add_analyse(sub)
     _add_synth(sub)
-    _add_science(sub)  # issue #3: grains, indices, classify
+    _add_science(sub)  # grains, indices, classify
+    _add_train_segmenter(sub)
     return ap
 
 
@@ -117,7 +130,7 @@ def _load_config(path):
 
 
 def _run_analyse(args):
-    from .pipeline import analyse_folder
+    from .workflow import analyse_folder
     kw = _load_config(args.config) if args.config else {}
     for k in _ANALYSE_KEYS:
         v = getattr(args, k, None)
@@ -127,15 +140,20 @@ def _run_analyse(args):
         kw["max_hole_px"] = None
     if kw.get("jobs") is not None and kw["jobs"] < 1:
         raise InputError(f"--jobs: expected >= 1, got {kw['jobs']}")
-    # --- issue #3 ---
     if kw.get("labels") is not None:
         from .classify import read_labels
         kw["labels"] = read_labels(kw["labels"])
+    if kw.get("segmenter") is not None:
+        from .segmenter_file import load_segmenter
+        kw["segmenter"] = load_segmenter(kw["segmenter"])
     if kw.get("classes") is not None:
-        from .grains import _parse_classes
-        _parse_classes(kw["classes"])
-    # --- end issue #3 ---
+        from .grains import parse_classes
+        parse_classes(kw["classes"])
     images, _ = analyse_folder(args.folder, args.out, **kw)
+    skipped = images.attrs.get("skipped", [])
+    if skipped:
+        print(f"semkit: skipped {len(skipped)} non-image file(s): {', '.join(skipped)}",
+              file=sys.stderr)
     failed = images["error"].fillna("").astype(str).str.len() > 0
     n_fail = int(failed.sum())
     if n_fail:
@@ -146,7 +164,7 @@ def _run_analyse(args):
     return 0
 
 
-# --- issue #3: semkit grains | indices | classify ------------------------------------------
+# ----------------------------------------------------------- semkit grains | indices | classify
 def _add_science(sub):
     p = sub.add_parser("grains", help="grain map and grain-size table (grains.csv) of a folder")
     p.add_argument("folder", metavar="DIR", help="folder of images (manifest.csv optional)")
@@ -177,7 +195,7 @@ def _add_science(sub):
 
 
 def _run_grains(args):
-    from .grains import analyse_grains_folder
+    from .workflow import analyse_grains_folder
     t = analyse_grains_folder(args.folder, args.out, minerals=args.minerals,
                               classes=args.classes, pixel_size_um=args.pixel_size_um,
                               progress=args.progress, seed=args.seed)
@@ -210,13 +228,58 @@ def _run_indices(args):
 
 
 def _run_classify(args):
-    from .classify import read_labels, save_model, train_from_folder
+    from .classify import read_labels, save_model
+    from .workflow import train_from_folder
     model = train_from_folder(args.folder, read_labels(args.train),
                               pixel_size_um=args.pixel_size_um, seed=args.seed)
     save_model(model, args.out)
-    print(f"wrote crack model to {args.out} ({len(model['trace_coef'])} trace-model terms)")
+    print(f"wrote crack model to {args.out} ({model['n_groups']} crack groups, "
+          f"{'/'.join(map(str, model['n_per_type']))} tensile/shear/mixed)")
     return 0
-# --- end issue #3 ------------------------------------------------------------------------
+
+
+def _add_train_segmenter(sub):
+    p = sub.add_parser("train-segmenter", help="train a crack pixel classifier from labels",
+                       description="Train a random-forest crack / not-crack pixel classifier "
+                                   "(for semkit analyse --segmenter) from label images: 0 "
+                                   "unlabelled, 1 crack, 2 not crack (scribbles or full "
+                                   "masks).")
+    p.add_argument("images", nargs="+", metavar="IMAGES",
+                   help="image files and/or folders (images without a label file are skipped)")
+    p.add_argument("--labels", required=True, metavar="LABELS",
+                   help="folder of label PNGs named <image stem>.png or <stem>_labels.png")
+    p.add_argument("--out", required=True, metavar="SEG.skops", help="model file to write")
+    p.add_argument("--binary-masks", action="store_true",
+                   help="labels are painted crack masks (0 background, nonzero crack)")
+    p.add_argument("--trees", type=int, default=None, metavar="N", help="trees (default 50)")
+    p.add_argument("--sigma-max-px", type=float, default=None, metavar="PX",
+                   help="largest feature scale, px (default 8)")
+    p.add_argument("--jobs", type=int, default=None, metavar="N", help="threads (default all)")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--no-progress", dest="progress", action="store_false", default=True)
+    p.set_defaults(run=_run_train_segmenter)
+
+
+def _run_train_segmenter(args):
+    from .segmenter import train_segmenter
+    from .segmenter_file import read_training_set, save_segmenter
+    if not str(args.out).endswith(".skops"):
+        raise InputError(f"--out: expected a .skops file name, got {args.out}")
+    images, labels, names, skipped = read_training_set(args.images, args.labels,
+                                                       binary_masks=args.binary_masks)
+    if skipped:
+        print(f"skipped {len(skipped)} image(s) without a label file: {', '.join(skipped)}",
+              file=sys.stderr)
+    kw = {k: v for k, v in (("n_trees", args.trees), ("sigma_max", args.sigma_max_px))
+          if v is not None}
+    seg = train_segmenter(images, labels, names=names, n_jobs=args.jobs, seed=args.seed,
+                          progress=args.progress, **kw)
+    save_segmenter(seg, args.out)
+    s = seg.scores
+    print(f"wrote {args.out}: {len(names)} images, {seg.label_counts['crack_sampled']} crack / "
+          f"{seg.label_counts['not_crack_sampled']} not-crack pixels; out-of-bag crack F1 "
+          f"{s.get('crack_f1', float('nan')):.3f} (optimistic: pixels of the training images)")
+    return 0
 
 
 def _run_synth(args):

@@ -152,6 +152,104 @@ GRAIN_COUNT_TOL = 0.10
 #: crack-type accuracy by crack area (pre-existing with a known grain map; post-test).
 PRE_TYPE_ACCURACY_MIN = 0.90
 POST_TYPE_ACCURACY_TARGET = 0.90
+#: floor the tests assert for the built-in post-test model on semkit.synth seeds 200-205
+#: (held out): it is fitted on the wider domain-randomised family of benchmarks/typing, of
+#: which semkit.synth is one part, and does not reach the 0.90 target there
+#: (docs/semkit_science.md quotes the measured value).
+POST_TYPE_ACCURACY_SYNTH_MIN = 0.75
+#: calibration: |mean confidence - observed accuracy| of crack groups (area-weighted).
+POST_CALIBRATION_GAP_MAX = 0.10
 #: per-image P against truth, median relative error.
 P_TOL_MEDIAN = 0.15
 # --- end issue #3 ---------------------------------------------------------------------------
+
+# --- sample region and SEM data bar (semkit.roi, semkit.databar) ---
+#: a data-bar row: at least this share of every third of the row holds the bar's background
+DATABAR_MIN_FLAT = 0.3
+#: grey tolerance (8-bit) around the row's modal grey
+DATABAR_TOL_GREY = 6
+#: the three rows next to a bar are sample: at most this flat (a round core's corners fade)
+DATABAR_SAMPLE_FLAT = 0.5
+#: rows of text or a thick scale bar may break the run of bar rows by at most this many
+DATABAR_MAX_GAP_ROWS = 12
+#: a data bar holds at least this many rows and this share of the height, at most the last
+DATABAR_MIN_ROWS = 8
+DATABAR_MIN_FRACTION = 0.02
+DATABAR_MAX_FRACTION = 0.35
+#: text and scale-bar pixels ("ink") lie within this of the other end of the 8-bit scale
+#: from the bar's background (white on a dark bar, black on a light one)
+DATABAR_INK_GREY = 80
+#: a bar holds at least this share of such pixels (rows without any are a surround)
+DATABAR_MIN_INK = 0.005
+#: a scale bar is a solid line at least this share of the image width long
+SCALEBAR_MIN_FRACTION = 0.03
+#: glyphs further apart than this many glyph heights belong to different words
+SCALEBAR_WORD_GAP = 1.2
+#: a scale-bar label is used only when every glyph correlates at least this well
+SCALEBAR_MIN_CONFIDENCE = 0.65
+#: a given pixel size and the scale bar's disagreeing by more than this is noted
+SCALEBAR_AGREE_FRACTION = 0.05
+#: a surround (black or white outside the sample): share of the border pixels it must hold
+SURROUND_MIN_BORDER_FRACTION = 0.10
+#: a surround's grey is at least this many grey tolerances away from the image's median
+SURROUND_MIN_SEPARATION = 4.0
+#: surround grey tolerance: this many noise sigmas, at least SURROUND_TOL_FRACTION of the range
+SURROUND_TOL_SIGMAS = 4.0
+SURROUND_TOL_FRACTION = 0.04
+#: the sample region is shrunk by this many px (the partial-volume rim of the sample's edge)
+ROI_MARGIN_PX = 3
+#: below this share of the image the sample region is flagged (roi_ok False)
+ROI_MIN_FRACTION = 0.2
+
+# --- ridge detector (semkit.ridge) ---
+#: scales of the dark-ridge response, px
+RIDGE_SIGMAS_PX = (1.0, 2.0, 4.0)
+#: scales from this up are computed on the image shrunk by 2, px
+RIDGE_COARSE_SIGMA_PX = 2.0
+#: weight of the edge (gradient) term: the dark side of a step edge is not a line
+RIDGE_EDGE_KAPPA = 1.0
+#: hysteresis levels of the ridge response, in units of its noise response
+RIDGE_HIGH_SNR = 8.0
+RIDGE_LOW_SNR = 4.0
+#: a ridge line holds seed pixels at least this deep (share of background - crack core);
+#: grain boundaries in semkit.synth are ~0.14, a faint crack more
+RIDGE_MIN_DEPTH_FRACTION = 0.2
+#: side of the grey closing giving the local background of a ridge, px
+RIDGE_CLOSING_PX = 9
+
+# --- rejection of dark non-crack objects (semkit.reject) ---
+#: a crack lies at least this far (share of the contrast) below the darker side around it
+REJECT_SIDE_DEPTH = 0.3
+#: ... unless it is a long line (a blurred 1-px crack is shallow but slender): skeleton length
+#: over mean width at least this
+REJECT_RIM_MAX_SLENDERNESS = 12.0
+#: a rim around a brighter grain: closes a loop around at least this many px, brighter than
+#: the darker side outside by this share of the contrast (and not reaching the crack core)
+REJECT_RIM_LOOP_PX = 20
+REJECT_RIM_HOLE_LIFT = 0.3
+#: ... and at least this wide (a blurred thin crack is shallow; its depth says little)
+REJECT_RIM_MIN_WIDTH_PX = 2.5
+#: objects smaller than this (px) are not judged: too few pixels for their statistics
+REJECT_MIN_AREA_PX = 30
+#: compact dark phase (biotite, opaque mineral): skeleton length under this many mean widths,
+#: at least this wide, and not reaching the crack core grey (an open void does: a pore)
+REJECT_COMPACT_SLENDERNESS = 3.0
+REJECT_COMPACT_WIDTH_PX = 6.0
+#: dark phase: the object's local background is below this share of the rock's (both from
+#: the crack core grey)
+REJECT_DARK_BACKGROUND = 0.4
+#: mottled, altered area: local background below this share, and at least this share of the
+#: window around the object detected
+REJECT_MOTTLED_BACKGROUND = 0.8
+REJECT_MOTTLED_DENSITY = 0.15
+#: ... and with at least this many other objects centred in the window around it
+REJECT_MOTTLED_NEIGHBOURS = 4
+#: an object whose dark core reaches this share of the crack contrast is an open crack or
+#: void: the dark-phase, mottled, compact and grain-rim rules never reject it
+REJECT_ZONE_MAX_DEPTH = 0.85
+#: side of the grey closing giving an object's local background (fills cracks narrower), px
+ZONE_CLOSING_PX = 21
+#: side of the window of the detection density, px
+ZONE_WINDOW_PX = 41
+#: side of the window in which neighbouring objects are counted, px
+ZONE_NEIGHBOUR_WINDOW_PX = 81

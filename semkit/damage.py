@@ -79,7 +79,10 @@ def image_damage(cracks, *, mixed="exclude", area_column=None):
     Returns
     -------
     table : pandas.DataFrame
-        One row per image: ``image, area_T_um2, area_S_um2, area_mixed_um2, P, P_status``.
+        One row per image: ``image, area_T_um2, area_S_um2, area_mixed_um2, P, P_status``;
+        with the typing's probabilities (``p_tensile, p_shear, p_mixed``) also ``P_low,
+        P_high, P_note`` and ``P_status = low_confidence`` when the typing cannot support P
+        (:mod:`semkit.damage_confidence`).
 
     Raises
     ------
@@ -130,7 +133,40 @@ def image_damage(cracks, *, mixed="exclude", area_column=None):
     out = df.groupby("image", sort=False, as_index=False).sum()
     out["P"] = damage_ratio(out["area_T_um2"].to_numpy(), out["area_S_um2"].to_numpy())
     out["P_status"] = p_status(out["area_T_um2"], out["area_S_um2"])
+    if {"p_tensile", "p_shear", "p_mixed"} <= set(c.columns):
+        _confidence(out, c, np.nan_to_num(c[area_column].to_numpy(float)), mixed)
     return out
+
+
+def _confidence(out, c, area, mixed):
+    """P_low, P_high, P_note and the low_confidence status (semkit.damage_confidence)."""
+    from .damage_confidence import p_confidence
+    prob = c[["p_tensile", "p_shear", "p_mixed"]].to_numpy(float, copy=True)
+    if "type_source" in c.columns:  # user labels are certain
+        user = (c["type_source"] == "user").to_numpy()
+        kinds = c["type_post"].astype(str).to_numpy()
+        for j, k in enumerate(("tensile", "shear", "mixed")):
+            prob[user, j] = (kinds[user] == k).astype(float)
+    trusted = c["type_post_ok"].fillna(True).astype(bool).to_numpy() \
+        if "type_post_ok" in c.columns else np.ones(len(c), bool)
+    if "type_source" in c.columns:
+        trusted = trusted | (c["type_source"] == "user").to_numpy()
+    cols = {k: [] for k in ("P_low", "P_high", "P_note")}
+    for img, status in zip(out["image"], out["P_status"]):
+        sel = (c["image"] == img).to_numpy()
+        r = p_confidence(area[sel], prob[sel], trusted=trusted[sel],
+                         group=c["group_id"].to_numpy()[sel] if "group_id" in c else None,
+                         mixed=mixed, notes=c["type_note"].astype(str).to_numpy()[sel]
+                         if "type_note" in c else None,
+                         tensile_fraction=c["tensile_fraction"].to_numpy()[sel]
+                         if "tensile_fraction" in c else None)
+        cols["P_low"].append(r["P_low"])
+        cols["P_high"].append(r["P_high"])
+        cols["P_note"].append(r["note"])
+    for k, v in cols.items():
+        out[k] = v
+    low = (out["P_status"] == "ok") & (out["P_note"] != "")
+    out.loc[low, "P_status"] = "low_confidence"
 
 
 def flag_outliers(values, *, z=OUTLIER_Z, min_n=OUTLIER_MIN_N):
@@ -291,11 +327,3 @@ def plot_p_by_stage(damage, path=None, *, ax=None):
         fig.savefig(tmp, dpi=120)
         os.replace(tmp, path)
     return fig
-
-
-def __getattr__(name):
-    """The pipeline's entry points live in ``semkit.damage_stage`` (imported on first use)."""
-    if name in ("science_stage", "write_science_outputs"):
-        from . import damage_stage
-        return getattr(damage_stage, name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -99,7 +99,10 @@ def illumination_field(image, *, method="polynomial", degree=config.FLATTEN_POLY
                 offset = _phase_offsets(r, keep)
                 r = r - offset
             s = 1.4826 * np.median(np.abs(r[keep] - np.median(r[keep]))) + 1e-6
-            keep = r > -2.5 * s
+            nxt = r > -2.5 * s
+            if nxt.sum() < 4 * a.shape[1]:  # a flat, noiseless image: keep the last fit
+                break
+            keep = nxt
         # evaluate at full resolution, separably: sum_j (sum_i c_ij u^i) (x) v^j
         uf = ((np.arange(w) + 0.5) / w * 2 - 1).astype(np.float32)
         vf = ((np.arange(h) + 0.5) / h * 2 - 1).astype(np.float32)

@@ -27,7 +27,7 @@ from .errors import InputError
 
 __all__ = ["LoadedImage", "read_image", "to_grey", "tiff_pixel_size", "magnification_pixel_size",
            "read_manifest", "resolve_pixel_size", "load_image", "write_image", "write_csv_atomic",
-           "list_images"]
+           "list_images", "list_folder"]
 
 _UNIT_UM = {"m": 1e6, "mm": 1e3, "um": 1.0, "µm": 1.0, "nm": 1e-3, "pm": 1e-6}
 
@@ -253,13 +253,30 @@ def load_image(path, *, manifest_row=None, pixel_size_um=None) -> LoadedImage:
 
 
 def list_images(folder):
-    """Sorted image-like files of ``folder`` (by suffix; other files are ignored)."""
+    """Sorted image files of ``folder`` (suffix in ``config.IMAGE_SUFFIXES``).
+
+    See Also
+    --------
+    list_folder : the images and the other files apart.
+    """
+    return list_folder(folder)[0]
+
+
+def list_folder(folder):
+    """The image files of ``folder`` and its other (non-hidden) files, each sorted.
+
+    Returns
+    -------
+    images, others : list of pathlib.Path
+        ``others`` leaves out ``manifest.csv``.
+    """
     folder = pathlib.Path(folder)
     if not folder.is_dir():
         raise InputError(f"{folder}: expected a folder of images")
-    skip = {".csv", ".json", ".md", ".txt", ".yaml", ".yml", ".py"}
-    return sorted(p for p in folder.iterdir()
-                  if p.is_file() and not p.name.startswith(".") and p.suffix.lower() not in skip)
+    files = sorted(p for p in folder.iterdir() if p.is_file() and not p.name.startswith("."))
+    images = [p for p in files if p.suffix.lower() in config.IMAGE_SUFFIXES]
+    others = [p for p in files if p not in images and p.name != "manifest.csv"]
+    return images, others
 
 
 def _atomic(path, write):

@@ -8,7 +8,8 @@ __all__ = ["TYPE_COLOURS", "overlay_cracks", "plot_histograms"]
 #: RGB colour of each crack type in overlays.
 TYPE_COLOURS = {"unknown": (255, 40, 40), "inter": (40, 200, 255), "intra": (255, 200, 0),
                 "trans": (255, 40, 200), "tensile": (255, 40, 40), "shear": (40, 255, 80),
-                "mixed": (255, 160, 0), "pore": (60, 90, 255)}
+                "mixed": (255, 160, 0), "pore": (60, 90, 255), "rejected": (0, 220, 220),
+                "region": (255, 255, 255)}
 
 
 def _to_u8(image):
@@ -20,7 +21,8 @@ def _to_u8(image):
         np.uint8)
 
 
-def overlay_cracks(image, labels, *, crack_types=None, pore_ids=()):
+def overlay_cracks(image, labels, *, crack_types=None, pore_ids=(), rejected_ids=(),
+                   region=None):
     """Outline crack objects on the grey image.
 
     Parameters
@@ -33,6 +35,11 @@ def overlay_cracks(image, labels, *, crack_types=None, pore_ids=()):
         Colours by :data:`TYPE_COLOURS`; default all ``unknown`` (red).
     pore_ids : sequence of int
         Labels drawn as pores (blue).
+    rejected_ids : sequence of int
+        Labels rejected as not cracks (:mod:`semkit.reject`), drawn in
+        ``TYPE_COLOURS["rejected"]`` (cyan).
+    region : (M, N) ndarray of bool, optional
+        Sample region; its outline is drawn in ``TYPE_COLOURS["region"]`` (white).
 
     Returns
     -------
@@ -52,7 +59,12 @@ def overlay_cracks(image, labels, *, crack_types=None, pore_ids=()):
             colour[int(k)] = TYPE_COLOURS.get(t, TYPE_COLOURS["unknown"])
     for k in pore_ids:
         colour[int(k)] = TYPE_COLOURS["pore"]
+    for k in rejected_ids:
+        colour[int(k)] = TYPE_COLOURS["rejected"]
     rgb[edge] = colour[lab[edge]]
+    if region is not None and not np.all(region):
+        r = np.asarray(region, np.uint8)
+        rgb[(r - cv2.erode(r, np.ones((3, 3), np.uint8))).astype(bool)] = TYPE_COLOURS["region"]
     return rgb
 
 

@@ -1,4 +1,6 @@
-"""Tests of semkit.classify (issue #3): He et al.'s pre-existing rule, post-test typing."""
+"""Tests of semkit.classify (issues #3, 15): He et al.'s pre-existing rule, post-test typing."""
+import functools
+
 import numpy as np
 import pandas as pd
 import pytest
@@ -7,28 +9,36 @@ from scipy import ndimage as ndi
 from semkit import config
 from semkit.classify import (
     DEFAULT_POST_MODEL,
-    FEATURE_NAMES,
     INTER_MIN_FRACTION,
     apply_labels,
     classify_post,
     classify_pre,
-    crack_clusters,
     load_model,
     read_labels,
     save_model,
     train_post,
 )
-from semkit.damage import damage_ratio, typed_areas
+from semkit.classify.model import (
+    STAGE2_NAMES,
+    _group_rows,
+    calibrate,
+    image_samples,
+    type_probabilities,
+)
+from semkit.damage import typed_areas
 from semkit.errors import InputError
 
 PRE = {"inter": 1, "intra": 2, "trans": 3}
 POST = {"tensile": 1, "shear": 2, "mixed": 3}
-# issue #3 targets: 0.90 for both accuracies, P within 15 % (median). Measured on the
-# held-out seeds 200-211 (docs/semkit_science.md): post accuracy 0.935 by area, median
-# |P error| 0.079 (0.933 and 0.059 on the seeds 200-205 used here): both targets asserted.
+# issue #3 target for pre-existing types: 0.90 by area. Post-test typing (issue 15) is
+# trained on the domain-randomised family of benchmarks/typing/render.py, of which
+# semkit.synth is one part; its accuracy on semkit.synth seeds 200-205 is asserted at
+# POST_SYNTH_ACCURACY_MIN, P within P_MEDIAN_ERROR_MAX or flagged (docs/semkit_science.md).
 PRE_AREA_ACCURACY_MIN = config.PRE_TYPE_ACCURACY_MIN
-POST_AREA_ACCURACY_MIN = config.POST_TYPE_ACCURACY_TARGET
+POST_SYNTH_ACCURACY_MIN = config.POST_TYPE_ACCURACY_SYNTH_MIN
 P_MEDIAN_ERROR_MAX = config.P_TOL_MEDIAN
+CALIBRATION_GAP_MAX = config.POST_CALIBRATION_GAP_MAX
+HELD_OUT_SEEDS = (200, 201, 202, 203, 204, 205)
 
 
 def _grain_map():
@@ -108,61 +118,95 @@ def test_classify_post_hand_drawn_tensile_and_shear():
     for c in range(25, 180, 12):
         img[94 + rng.integers(0, 2), c:c + 2] = 30
     img = ndi.gaussian_filter(img, 0.6) + rng.normal(0, 3, img.shape)
-    # objects as the crack pipeline defines them (the model is trained on those): the
-    # en-echelon pieces and their debris are one object. (From a bare threshold, 1-px pieces
-    # 3 px apart stay separate 24-px objects: too short to type reliably on their own.)
-    from semkit.pipeline import analyse_image
-    a = analyse_image(np.clip(img, 0, 255).astype(np.uint8), pixel_size_um=1.0)
+    from semkit.analysis import analyse_image
+    a = analyse_image(np.clip(img, 0, 255).astype(np.uint8), pixel_size_um=1.0,
+                      stage="failure")
     lab = a.crack_labels
-    t, types = classify_post(lab, image=a.smooth)
+    t, types = classify_post(lab, image=a.smooth, skeleton=a.skeleton)
     a_t = ((types == 1) & (lab > 0))[20:40].sum() / (lab[20:40] > 0).sum()
     a_s = ((types == 2) & (lab > 0))[80:100].sum() / (lab[80:100] > 0).sum()
     assert a_t > 0.9 and a_s > 0.9, (a_t, a_s)
-    assert t.loc[t.frac_tensile > 0.5, "aperture_mean_px"].min() > 4.0
+    tensile = t[t.type_post == "tensile"]
+    assert np.exp(tensile["log_aperture"]).min() > 4.0 and tensile.type_post_ok.all()
+    assert (t.p_tensile + t.p_shear + t.p_mixed).round(9).eq(1).all()
+    np.testing.assert_allclose(t.confidence, t[["p_tensile", "p_shear", "p_mixed"]].max(axis=1))
 
 
-def test_crack_clusters_attach_debris_to_nearest_large_crack():
-    lab = np.zeros((50, 100), np.int32)
-    lab[10:13, 5:95] = 1      # large crack
-    lab[18:20, 40:42] = 2     # speck 5 px away -> joins 1
-    lab[46:48, 40:42] = 3     # speck 14 px away -> alone
-    lab[30:33, 5:95] = 4      # another large crack
-    lab[25:27, 60:62] = 5     # speck nearer to 4 (3 px) than to 1 (12 px)
-    assert crack_clusters(lab).tolist() == [0, 1, 1, 3, 4, 4]
-    assert crack_clusters(lab, link_px=2).tolist() == [0, 1, 2, 3, 4, 5]
-
-
+@functools.lru_cache(maxsize=None)
 def _post_sample(seed):
     """A post-test synthetic image analysed by the crack pipeline: (synth, analysis, truth)."""
     synth = pytest.importorskip("semkit.synth")
-    from semkit.pipeline import analyse_image
+    from semkit.analysis import analyse_image
     s = synth.make_sem_image((384, 512), stage="post", n_cracks=12, seed=seed)
-    a = analyse_image(s.image, pixel_size_um=s.pixel_size_um)
+    a = analyse_image(s.image, pixel_size_um=s.pixel_size_um, stage="failure")
     code = np.zeros(len(s.cracks) + 1, int)
     code[s.cracks.crack_id] = [POST[x] for x in s.cracks.type_post]
     return s, a, code[s.crack_labels]
 
 
 def test_classify_post_synthetic_accuracy_and_p():
-    good = tot = 0
-    p_err = []
-    for seed in (200, 201, 202, 203, 204, 205):
+    """Type accuracy by area on held-out semkit.synth images, and the issue-15 rule for P:
+    within 15 % of the truth or flagged low_confidence, never a confident P off by more than
+    2x; the typing's 10-90 % P band holds the true P in at least 4 of the 6 images."""
+    good = tot = covered = 0
+    for seed in HELD_OUT_SEEDS:
         s, a, truth = _post_sample(seed)
         lab = a.crack_labels
-        table, types = classify_post(lab, image=a.smooth)
+        th = a.thresholded
+        table, types = classify_post(lab, image=a.smooth, skeleton=a.skeleton,
+                                     background=th.background, crack_level=th.crack_level)
         sel = (truth > 0) & (lab > 0)
         good += (types[sel] == truth[sel]).sum()
         tot += sel.sum()
-        areas = typed_areas(a.smooth, lab, types)
-        p = damage_ratio(areas.area_T_px.sum(), areas.area_S_px.sum())
-        p_true = (truth == 1).sum() / (truth == 2).sum()
-        p_err.append(abs(p / p_true - 1))
         assert set(table.type_post) <= {"tensile", "shear", "mixed"}
-        assert ((table.confidence >= 0) & (table.confidence <= 1)).all()
+        assert ((table.confidence >= 1 / 3) & (table.confidence <= 1)).all()
         np.testing.assert_allclose(table[["frac_tensile", "frac_shear", "frac_mixed"]].sum(
             axis=1), 1.0, atol=1e-9)
-    assert good / tot >= POST_AREA_ACCURACY_MIN, good / tot
-    assert np.median(p_err) <= P_MEDIAN_ERROR_MAX, np.round(p_err, 3)
+        row = a.summary()
+        p_true = (truth == 1).sum() / (truth == 2).sum()
+        err = row["P"] / p_true - 1
+        assert abs(err) <= P_MEDIAN_ERROR_MAX or row["P_status"] == "low_confidence", (
+            seed, err, row["P_status"])
+        assert row["P_status"] != "ok" or 0.5 <= row["P"] / p_true <= 2, (seed, err)
+        covered += row["P_low"] <= p_true <= row["P_high"]
+    assert good / tot >= POST_SYNTH_ACCURACY_MIN, good / tot
+    assert covered >= 4, covered
+
+
+def _groups(seeds):
+    """Crack groups of analysed held-out images with their true majority type."""
+    out = []
+    for seed in seeds:
+        _, a, truth = _post_sample(seed)
+        th = a.thresholded
+        out.append(image_samples(a.crack_labels, truth, image=a.smooth, skeleton=a.skeleton,
+                                 background=th.background, crack_level=th.crack_level))
+    return out
+
+
+def test_post_probabilities_are_calibrated():
+    """The built-in model's confidence matches the observed accuracy on images it was not
+    fitted or calibrated on (semkit.synth seeds 200-205: crack groups, weighted by area),
+    overall and among the groups below and above 0.8; and the temperature fit undoes a
+    model made 4x overconfident."""
+    samples = _groups(HELD_OUT_SEEDS)
+    D, y, area = _group_rows(samples, DEFAULT_POST_MODEL)
+    P = type_probabilities(D, DEFAULT_POST_MODEL)
+    conf, hit = P.max(axis=1), (P.argmax(axis=1) == y).astype(float)
+    for sel in (conf > 0, conf < 0.8, conf >= 0.8):
+        gap = np.average(conf[sel], weights=area[sel]) - np.average(hit[sel],
+                                                                     weights=area[sel])
+        assert sel.sum() >= 10 and abs(gap) <= CALIBRATION_GAP_MAX, (sel.sum(), gap)
+    base = calibrate(dict(DEFAULT_POST_MODEL), samples)["temperature"]
+    sharp = dict(DEFAULT_POST_MODEL, temperature=1.0,
+                 coef=(4 * np.asarray(DEFAULT_POST_MODEL["coef"])).tolist(),
+                 intercept=(4 * np.asarray(DEFAULT_POST_MODEL["intercept"])).tolist())
+    before = type_probabilities(D, sharp)
+    fitted = calibrate(dict(sharp), samples)
+    assert fitted["temperature"] == pytest.approx(4 * base, rel=0.02)
+    after = type_probabilities(D, fitted)
+    nll = [-np.mean(np.log(q[np.arange(len(y)), y])) for q in (before, after)]
+    assert nll[1] < nll[0], nll
 
 
 def test_typed_areas_partial_volume_unbiased_for_thin_lines():
@@ -191,20 +235,26 @@ def test_train_save_load_and_user_labels(tmp_path):
         s, a, truth = _post_sample(seed)
         lab = a.crack_labels
         samples.append((lab, np.where(lab > 0, truth, 0), a.smooth))
-    model = train_post(samples, seed=0)
-    assert len(model["coef"]) == len(FEATURE_NAMES) == 13 and model["version"] == 2
+    model = train_post(samples[:2], seed=0, calibration=samples[2:])
+    assert model["version"] == 3 and model["features"] == list(STAGE2_NAMES)
+    assert model["temperature"] > 0 and model["n_calibration"] > 0
     save_model(model, tmp_path / "m.json")
     back = load_model(tmp_path / "m.json")
     lab = samples[0][0]
     t1, i1 = classify_post(lab, model=model)
     t2, i2 = classify_post(lab, model=back)
     assert (i1 == i2).all() and t1.type_post.tolist() == t2.type_post.tolist()
+    assert train_post(samples[:2], seed=0)["coef"] == train_post(samples[:2], seed=0)["coef"]
     (tmp_path / "bad.json").write_text('{"coef": [1, 2]}')
     with pytest.raises(InputError, match="bad.json"):
         load_model(tmp_path / "bad.json")
+    old = dict(model, version=2)
+    (tmp_path / "old.json").write_text(__import__("json").dumps(old))
+    with pytest.raises(InputError, match="retrain"):
+        load_model(tmp_path / "old.json")
     with pytest.raises(InputError, match="tensile and shear"):
         train_post([(lab, {1: "tensile"})])
-    # user labels override the model
+    # user labels override the model, with certainty
     cracks = t1.assign(image="a.png")
     first = int(cracks.crack_id.iloc[0])
     labels_csv = tmp_path / "labels.csv"
@@ -212,9 +262,10 @@ def test_train_save_load_and_user_labels(tmp_path):
     out = apply_labels(cracks, read_labels(labels_csv))
     row = out[out.crack_id == first].iloc[0]
     assert row.type_post == "mixed" and row.confidence == 1.0 and row.type_source == "user"
-    assert row.frac_mixed == 1.0 and row.frac_tensile == 0.0
+    assert row.frac_mixed == 1.0 and row.frac_tensile == 0.0 and row.p_mixed == 1.0
+    assert row.type_post_ok and row.type_note == ""
     assert (out[out.crack_id != first].type_source == "model").all()
     pd.DataFrame(dict(image=["a"], crack_id=[1], type=["bogus"])).to_csv(tmp_path / "x.csv")
     with pytest.raises(InputError, match="bogus"):
         read_labels(tmp_path / "x.csv")
-    assert len(DEFAULT_POST_MODEL["coef"]) == len(DEFAULT_POST_MODEL["mean"]) == 13
+    assert DEFAULT_POST_MODEL["version"] == 3 and "seed" in DEFAULT_POST_MODEL

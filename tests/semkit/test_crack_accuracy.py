@@ -11,7 +11,7 @@ from _synth_cases import SEEDS, case
 from scipy import ndimage as ndi
 
 from semkit import config
-from semkit.pipeline import analyse_image
+from semkit.analysis import analyse_image
 
 
 def _errors(gradient):

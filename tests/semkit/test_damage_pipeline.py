@@ -43,11 +43,16 @@ def test_analyse_writes_types_p_damage_and_grains(folder, tmp_path):
         r = imgs.loc[name]
         if r.area_S_um2 > 0:
             assert r.P == pytest.approx(r.area_T_um2 / r.area_S_um2)
+    # rows of rejected objects (rejected_as set) are not cracks and carry no type
+    rejected = cracks["rejected_as"].fillna("").astype(str) != ""
+    assert (cracks.loc[rejected, "type_post"] == "unknown").all()
+    cracks = cracks[~rejected]
     post = cracks[cracks.image != "img0.png"]
     assert set(post.type_post) <= {"tensile", "shear", "mixed"}
     assert (cracks[cracks.image == "img0.png"].type_post == "unknown").all()
     assert set(cracks.type_pre) <= {"inter", "intra", "trans"}
-    assert {"aperture_mean_px", "frac_tensile", "area_pv_um2", "confidence"} <= set(cracks)
+    assert {"log_aperture", "frac_tensile", "area_pv_um2", "confidence", "p_shear",
+            "type_post_ok", "type_note"} <= set(cracks)
     dmg = pd.read_csv(out / "damage.csv")
     assert list(dmg.stage) == ["pre-test", "initiating", "failure"]
     assert dmg.set_index("stage").loc["failure", "P_mean"] == pytest.approx(
@@ -96,7 +101,8 @@ def test_classify_train_cli_and_labels_override(folder, tmp_path):
     assert main(["classify", str(d), "--train", str(tmp_path / "labels.csv"), "--out",
                  str(model)]) == 0
     m = json.loads(model.read_text())
-    assert len(m["coef"]) == 13 and len(m["trace_coef"]) == 23 and len(m["trace_coef"][0]) == 3
+    assert m["version"] == 3 and len(m["coef"]) == 3 and len(m["coef"][0]) == len(m["mean"])
+    assert m["n_per_type"][0] > 0 and m["n_per_type"][1] > 0 and m["n_per_type"][2] == 0
     out2 = tmp_path / "out2"
     assert main(["analyse", str(d), "--out", str(out2), "--jobs", "1", "--no-progress",
                  "--no-overlay", "--crack-model", str(model), "--labels",

@@ -169,8 +169,8 @@ def test_bad_inputs():
 def test_grains_on_pipeline_synth_with_cracks(seed):
     """semkit.synth grains (3 % grey jitter per grain, faint boundaries, cracks masked out)."""
     synth = pytest.importorskip("semkit.synth")
+    from semkit.analysis import analyse_image
     from semkit.grains import grains_stage
-    from semkit.pipeline import analyse_image
     s = synth.make_sem_image((512, 640), stage="pre", n_cracks=6, seed=seed)
     a = analyse_image(s.image, pixel_size_um=s.pixel_size_um)
     names = ["pyroxene", "biotite", "plagioclase"]  # synth greys 200 > 150 > 100

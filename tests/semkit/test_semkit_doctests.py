@@ -4,7 +4,7 @@ import importlib
 
 import pytest
 
-MODULES = ["io", "illumination", "threshold", "cleanup", "skeleton", "measure", "pipeline",
+MODULES = ["io", "illumination", "threshold", "cleanup", "skeleton", "measure", "analysis",
            "synth"]
 
 

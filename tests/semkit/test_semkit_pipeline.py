@@ -1,11 +1,11 @@
-"""semkit.pipeline and semkit.cli: batch runs, failures recorded, exit codes, laziness."""
+"""semkit.workflow and semkit.cli: batch runs, failures recorded, exit codes, laziness."""
 import numpy as np
 import pandas as pd
 import pytest
 
-from semkit import cli, pipeline
+from semkit import analysis, cli, workflow
+from semkit.analysis import analyse_image
 from semkit.io import write_image
-from semkit.pipeline import analyse_image
 from semkit.synth import make_sem_image
 
 GOOD = ("a.png", "b.png", "c.png")
@@ -40,13 +40,15 @@ def test_batch_goes_on_and_records_errors(bad_folder, tmp_path, capsys):
                    "--pixel-size-um", "2.0", "--no-classify"])
     assert rc == 1
     err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and "4 of 7 images failed" in err[0]
+    # issue 15: a non-image file is skipped and listed in one line, not a failed image
+    assert len(err) == 2 and err[0] == "semkit: skipped 1 non-image file(s): notes.gif"
+    assert "3 of 6 images failed" in err[1]
     img = pd.read_csv(out / "images.csv", keep_default_na=False)
-    assert list(img.columns[:12]) == pipeline.IMAGE_COLUMNS
+    assert list(img.columns[:12]) == analysis.IMAGE_COLUMNS
     errors = dict(zip(img["image"], img["error"]))
     assert "cannot read" in errors["corrupt.png"] and "cannot read" in errors["empty.tif"]
     assert "no contrast" in errors["dark.png"]
-    assert "unsupported format" in errors["notes.gif"]
+    assert "notes.gif" not in errors
     assert all(errors[n] == "" for n in GOOD)
     src = dict(zip(img["image"], img["pixel_size_source"]))
     assert src == {**src, "a.png": "manifest", "b.png": "magnification", "c.png": "cli"}
@@ -64,8 +66,8 @@ def test_batch_goes_on_and_records_errors(bad_folder, tmp_path, capsys):
 
 def test_parallel_equals_serial(folder, tmp_path):
     kw = dict(progress=False, overlays=False, classify=False)
-    i1, c1 = pipeline.analyse_folder(folder, tmp_path / "s", jobs=1, **kw)
-    i2, c2 = pipeline.analyse_folder(folder, tmp_path / "p", jobs=2, **kw)
+    i1, c1 = workflow.analyse_folder(folder, tmp_path / "s", jobs=1, **kw)
+    i2, c2 = workflow.analyse_folder(folder, tmp_path / "p", jobs=2, **kw)
     cols = ["image", "n_cracks", "crack_area_um2", "crack_length_um", "crack_area_fraction"]
     pd.testing.assert_frame_equal(i1[cols], i2[cols])
     pd.testing.assert_frame_equal(c1.drop(columns=[]), c2)
@@ -98,7 +100,7 @@ def test_config_file_and_flags(folder, tmp_path):
 
 
 def test_interrupt_keeps_finished_results(folder, tmp_path, monkeypatch):
-    real = pipeline.analyse_file
+    real = workflow.analyse_file
     calls = []
 
     def flaky(path, **kw):
@@ -107,7 +109,7 @@ def test_interrupt_keeps_finished_results(folder, tmp_path, monkeypatch):
             raise KeyboardInterrupt
         return real(path, **kw)
 
-    monkeypatch.setattr(pipeline, "analyse_file", flaky)
+    monkeypatch.setattr(workflow, "analyse_file", flaky)
     out = tmp_path / "o"
     rc = cli.main(["analyse", str(folder), "--out", str(out), "--no-progress", "--jobs", "1",
                    "--no-classify"])
@@ -143,3 +145,24 @@ def test_bad_options():
         analyse_image(np.zeros((10, 10)), despeckle="gauss")
     with pytest.raises(InputError, match="pixel_size_um"):
         analyse_image(np.zeros((10, 10)), pixel_size_um=0)
+
+
+def test_save_masks_and_typing_only_on_loaded_stages(folder, tmp_path):
+    """--save-masks writes the 0/255 crack mask and the 16-bit labels (= crack_id); without
+    --classify only manifest images of a loaded stage are typed (b.png: failure)."""
+    from semkit.io import read_image
+    out = tmp_path / "o"
+    assert cli.main(["analyse", str(folder), "--out", str(out), "--no-progress", "--jobs", "1",
+                     "--save-masks", "--no-overlay"]) == 0
+    img = pd.read_csv(out / "images.csv").set_index("image")
+    assert img.loc["a.png", "P_status"] == "pre-test"
+    assert img.loc["c.png", "P_status"] == "not_classified"
+    assert img.loc["b.png", "P_status"] in ("ok", "low_confidence", "no_shear", "no_cracks")
+    cracks = pd.read_csv(out / "cracks.csv")
+    for name in GOOD:
+        m = read_image(out / "masks" / f"{name[:-4]}_cracks.png")
+        lab = read_image(out / "masks" / f"{name[:-4]}_labels.png")
+        assert m.dtype == np.uint8 and set(np.unique(m)) <= {0, 255}
+        assert lab.dtype == np.uint16 and ((lab > 0) == (m == 255)).all()
+        kept = cracks[(cracks.image == name) & cracks.rejected_as.isna()]
+        assert set(np.unique(lab[lab > 0])) == set(kept.crack_id)

@@ -76,3 +76,19 @@ def test_otsu_on_few_percent_cracks_grabs_a_mineral_and_is_flagged():
     img = denoise(flatten_illumination(s.image)[0])
     r = crack_mask(img, method="otsu")
     assert r.dark_fraction > 0.2 and not r.ok and "mineral" in r.note
+
+
+def test_illumination_field_on_a_flat_nearly_noiseless_image():
+    """A uniform matrix with little noise: the robust refit once dropped every pixel and
+    crashed; the field is flat (evenly lit) and finite."""
+    from scipy import ndimage as ndi
+
+    from semkit.illumination import illumination_field
+    rng = np.random.default_rng(3)
+    img = np.full((200, 400), 170.0)
+    img[54:66, 20:380] = 30
+    for k, c0 in enumerate(range(20, 380, 20)):
+        img[150 + 2 * (k % 2), c0:c0 + 24] = 30
+    img = np.clip(ndi.gaussian_filter(img, 0.7) + rng.normal(0, 3, img.shape), 0, 255)
+    f = illumination_field(img.astype(np.uint8))
+    assert np.isfinite(f).all() and f.min() > 0.9 and f.max() == 1.0

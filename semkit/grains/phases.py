@@ -7,8 +7,8 @@ from __future__ import annotations
 import numpy as np
 from scipy import ndimage as ndi
 
-from . import config
-from .errors import InputError
+from .. import config
+from ..errors import InputError
 
 __all__ = ["mineral_phases", "phase_separability"]
 

@@ -10,9 +10,8 @@ import numpy as np
 import pandas as pd
 from scipy import ndimage as ndi
 
-from . import config
-from .classify_features import skeleton_of
-from .errors import InputError
+from .. import config
+from ..errors import InputError
 
 __all__ = ["classify_pre", "INTER_MIN_FRACTION", "INTRA_MIN_FRACTION", "BOUNDARY_TOL_PX"]
 
@@ -79,7 +78,10 @@ def classify_pre(crack_labels, grain_labels, *, skeleton=None,
         raise InputError(f"grain_labels: expected shape {lab.shape}, got {g.shape}")
     g = _fill_grains(g)
     mask = lab > 0
-    skel = skeleton_of(mask) if skeleton is None else (np.asarray(skeleton, bool) & mask)
+    if skeleton is None:
+        from skimage.morphology import skeletonize
+        skeleton = skeletonize(mask)
+    skel = np.asarray(skeleton, bool) & mask
     # pixels whose 4-neighbourhood has another grain: the boundary, both sides
     bnd = np.zeros(g.shape, bool)
     bnd[:, 1:] |= g[:, 1:] != g[:, :-1]

@@ -6,10 +6,10 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from . import config
-from .errors import InputError
+from .. import config
+from ..errors import InputError
 
-__all__ = ["slenderness", "grain_table", "grain_size_table"]
+__all__ = ["slenderness", "grain_table", "grain_size_table", "parse_classes"]
 
 AUTO_CLASS_PERCENTILES = config.AUTO_CLASS_PERCENTILES
 AUTO_CLASS_PERCENTILES = config.AUTO_CLASS_PERCENTILES
@@ -131,7 +131,7 @@ def _edges(value, what):
     return e
 
 
-def _parse_classes(classes):
+def parse_classes(classes):
     if classes is None:
         return None
     if isinstance(classes, dict):
@@ -176,7 +176,7 @@ def grain_size_table(grains, *, classes=None, volume_fractions=None):
         raise InputError("grains table: no grains")
     minerals = list(grains.groupby("mineral")["area_um2"].sum().sort_values(
         ascending=False).index)
-    edges_cfg = _parse_classes(classes)
+    edges_cfg = parse_classes(classes)
     total = grains["area_um2"].sum()
     rows = []
     for name in minerals:

@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 from scipy import ndimage as ndi
 
-from . import config
-from .errors import InputError
-from .grains_phases import _as_grey, _smooth_masked
+from .. import config
+from ..errors import InputError
+from .phases import _as_grey, _smooth_masked
 
 __all__ = ["segment_grains"]
 

@@ -1,0 +1,484 @@
+"""The analysis of one image: :class:`CrackAnalysis`, every stage a lazily computed attribute.
+
+Each stage runs on first access (``functools.cached_property``), so a stage whose output is not
+asked for never runs: without ``length`` there is no skeleton; without ``grains`` no grain map;
+a pre-test image is never typed tensile / shear. The folder loop (:mod:`semkit.workflow`), the
+CLI and ``gbmgen run`` all go through this one object.
+"""
+from __future__ import annotations
+
+import functools
+
+import numpy as np
+import pandas as pd
+
+from . import config
+from .errors import InputError
+from .options import AnalysisOptions
+
+__all__ = ["CrackAnalysis", "analyse_image", "IMAGE_COLUMNS", "EXTRA_IMAGE_COLUMNS",
+           "LOADED_STAGES"]
+
+#: images.csv columns (DESIGN.md §4) in order; more follow.
+IMAGE_COLUMNS = ["image", "pixel_size_um", "pixel_size_source", "threshold_method",
+                 "threshold_value", "n_cracks", "crack_area_um2", "crack_length_um",
+                 "area_T_um2", "area_S_um2", "P", "seconds"]
+#: images.csv columns after :data:`IMAGE_COLUMNS`.
+EXTRA_IMAGE_COLUMNS = ["valid", "valid_note", "image_area_um2", "crack_area_fraction",
+                       "crack_density_per_mm", "threshold_ok", "threshold_note", "roi",
+                       "roi_fraction", "roi_ok", "data_bar_rows", "pixel_size_note", "n_thin",
+                       "n_rejected", "n_pores", "pore_area_um2", "width_px", "height_px", "flatten",
+                       "despeckle", "error"]
+#: manifest stages of a loaded specimen (post-test cracks: tensile / shear typing applies).
+LOADED_STAGES = tuple(s for s in config.STAGE_ORDER if s != "pre-test")
+
+
+def _stage_name(stage):
+    if stage is None or (isinstance(stage, float) and np.isnan(stage)):
+        return None
+    return str(stage)
+
+
+class CrackAnalysis:
+    """Lazy analysis of one grey image; each attribute is one stage.
+
+    Notation: M x N image, n objects after cleaning (cracks and pores), labels 1..n.
+
+    Attributes (computed on first access)
+    -------------------------------------
+    flat, field : (M, N) float32
+        Flattened image and illumination field (stage 2).
+    smooth : (M, N) float32
+        Denoised flattened image.
+    thresholded : ThresholdResult
+        Stage 3.
+    object_mask, area_mask : (M, N) bool
+        Cleaned objects (stage 4) and the pixels counted for area.
+    labels : (M, N) int32 ; n_objects : int
+        Crack (and pore) objects (stage 5). ``crack_labels`` has pores removed.
+    skeleton : (M, N) bool
+        Thin skeleton of ``object_mask`` (stage 6; only when ``options.length``).
+    objects : DataFrame
+        One row per object (:func:`semkit.measure.crack_table`), ``is_pore`` flags pores.
+    cracks : DataFrame
+        ``objects`` without pores, with the object label in ``crack_id``.
+    grain_map : tuple or None
+        ``(grain_labels, phase_labels, grains)`` when ``options.grains`` (stage 8).
+    typed_cracks : DataFrame
+        ``cracks`` with types, confidences and features (stage 7).
+    """
+
+    def __init__(self, image, *, pixel_size_um=config.DEFAULT_PIXEL_SIZE_UM,
+                 pixel_size_source="cli", name="", options=None, stage=None, seed=None):
+        from .io import to_grey
+        img = to_grey(np.asarray(image))
+        if img.ndim != 2 or img.size == 0:
+            raise InputError(f"{name or 'image'}: expected a non-empty 2-D image")
+        if not np.isfinite(img).all() if img.dtype.kind == "f" else False:
+            raise InputError(f"{name or 'image'}: image holds NaN or inf")
+        if not pixel_size_um > 0:
+            raise InputError(f"pixel_size_um: expected > 0, got {pixel_size_um}")
+        self.options = options or AnalysisOptions()
+        self.raw_image = img
+        self.pixel_size_um = float(pixel_size_um)
+        self.pixel_size_source = pixel_size_source
+        self.pixel_size_note = ""
+        self.name = name
+        self.stage = _stage_name(stage)
+        self.seed = seed
+        self.data_bar = self.scale_bar = None
+        if self.options.roi == "auto":
+            self._crop_data_bar()
+        else:
+            self.image = img
+
+    # stage 1b: SEM data bar (cropped) and its scale bar
+    def _crop_data_bar(self):
+        from .databar import crop_data_bar
+        c = crop_data_bar(self.raw_image, pixel_size_um=self.pixel_size_um,
+                          pixel_size_source=self.pixel_size_source)
+        self.image, self.data_bar, self.scale_bar = c.image, c.bar, c.scale_bar
+        self.pixel_size_um, self.pixel_size_source = c.pixel_size_um, c.pixel_size_source
+        self.pixel_size_note = c.note
+
+    # stage 1c: sample region
+    @functools.cached_property
+    def region(self):
+        """The sample region (:class:`semkit.roi.SampleRegion`) of ``image``."""
+        from .roi import SampleRegion, find_sample_region, read_roi_mask
+        roi = self.options.roi
+        if roi == "none":
+            return SampleRegion(np.ones(self.image.shape, bool), "none", 1.0)
+        if roi != "auto":
+            return read_roi_mask(roi, self.image.shape)
+        return find_sample_region(self.image)
+
+    @functools.cached_property
+    def _work_image(self):
+        """``image`` with the pixels outside the sample region filled (see :mod:`semkit.roi`)."""
+        from .roi import fill_outside
+        r = self.region
+        if r.fraction >= 1.0:
+            return self.image
+        out = fill_outside(self.image, r.mask)
+        if self.image.dtype.kind in "ui":  # same dtype: a segmenter scales by the dtype range
+            out = np.rint(out).astype(self.image.dtype)
+        return out
+
+    # stage 2
+    @functools.cached_property
+    def _flat_field(self):
+        from .illumination import flatten_illumination
+        img = self._work_image
+        if self.options.flatten == "none":
+            return img.astype(np.float32), np.ones(img.shape, np.float32)
+        return flatten_illumination(img, method=self.options.flatten)
+
+    @property
+    def flat(self):
+        return self._flat_field[0]
+
+    @property
+    def field(self):
+        return self._flat_field[1]
+
+    @functools.cached_property
+    def smooth(self):
+        from .cleanup import denoise
+        return denoise(self.flat, sigma_px=self.options.denoise_sigma_px)
+
+    # stage 3
+    @functools.cached_property
+    def thresholded(self):
+        from .threshold import crack_mask
+        img = self.smooth
+        if float(np.ptp(img)) == 0.0:
+            raise InputError(f"{self.name or 'image'}: image is uniform (no contrast)")
+        return crack_mask(img, method=self.options.threshold)
+
+    @functools.cached_property
+    def ridge(self):
+        """``(mask, depth)`` of thin dark lines (:func:`semkit.ridge.ridge_mask`), or None
+        when the ridge detector is off or the threshold found no crack grey."""
+        t = self.thresholded
+        if not self.options.ridge or t.method != "auto" or not np.isfinite(t.crack_level):
+            return None
+        from .ridge import ridge_mask
+        return ridge_mask(self.smooth, crack_level=t.crack_level, region=self.region.mask)
+
+    @functools.cached_property
+    def detection(self):
+        """``(detect_mask, area_mask)`` before cleaning: the threshold fused with the ridge
+        lines, or the segmenter's decision when one is given; nothing outside the region."""
+        seg = self.options.segmenter
+        if seg is not None:
+            p = seg.crack_probability(self._work_image)
+            det = area = np.asarray(p) >= seg.threshold
+        else:
+            t = self.thresholded
+            det, area = t.detect_mask, t.mask
+            if self.ridge is not None:
+                from .ridge import add_ridge_lines
+                det, area = add_ridge_lines(det, area, *self.ridge)
+        inside = self.region.mask
+        return det & inside, area & inside
+
+    # stage 4
+    @functools.cached_property
+    def _masks(self):
+        from . import cleanup
+        det, area = self.detection
+        if self.options.despeckle == "median":  # ImageJ: one binary, then a 3 x 3 median
+            det = area = cleanup.despeckle_median(area)
+        elif self.options.despeckle == "specks":
+            det = cleanup.remove_specks(det)
+        if self.options.min_area_um2:
+            det = cleanup.remove_small_objects(
+                det, min_area_px=self.options.min_area_um2 / self.pixel_size_um ** 2)
+        if self.options.bridge_gaps:
+            det = cleanup.bridge_gaps(det)
+        filled = cleanup.fill_holes(det, max_hole_px=self.options.max_hole_px)
+        area = (area & det) | (filled & ~det)
+        inside = self.region.mask
+        return filled & inside, area & inside
+
+    @property
+    def object_mask(self):
+        return self._masks[0]
+
+    @property
+    def area_mask(self):
+        return self._masks[1]
+
+    # stage 5
+    @functools.cached_property
+    def _labels(self):
+        from .measure import label_cracks
+        return label_cracks(self.object_mask)
+
+    @property
+    def labels(self):
+        return self._labels[0]
+
+    @property
+    def n_objects(self):
+        return self._labels[1]
+
+    # stage 6
+    @functools.cached_property
+    def skeleton(self):
+        from .skeleton import prune_spurs, skeletonize
+        return prune_spurs(skeletonize(self.object_mask), self.object_mask)
+
+    @functools.cached_property
+    def objects(self):
+        from .measure import crack_table, partial_volume_area
+        t = crack_table(self.labels, self.n_objects, pixel_size_um=self.pixel_size_um,
+                        skeleton=self.skeleton if self.options.length else None,
+                        area_mask=self.area_mask, image_name=self.name)
+        t["area_method"] = "count"
+        th = None if self.options.segmenter is not None else self.thresholded
+        if th is not None and th.background is not None and t["thin"].any():
+            # thin cracks never reach the midpoint: their area is their partial volume
+            thin = t["thin"].to_numpy()
+            ids = t["crack_id"].to_numpy()[thin]
+            pv = partial_volume_area(self.smooth, self.labels, self.n_objects,
+                                     background=th.background, crack_level=th.crack_level,
+                                     ids=ids)
+            px2 = self.pixel_size_um ** 2
+            t.loc[thin, "area_px"] = pv[ids]
+            t.loc[thin, "area_um2"] = pv[ids] * px2
+            t.loc[thin, "mean_aperture_um"] = (pv[ids] / t.loc[thin, "length_px"].to_numpy()
+                                               * self.pixel_size_um)
+            t.loc[thin, "area_method"] = "partial_volume"
+        return t
+
+    @functools.cached_property
+    def crack_level(self):
+        """Crack core grey (the ``auto`` threshold's, else the dark-class analysis's)."""
+        t = None if self.options.segmenter is not None else self.thresholded
+        if t is not None and np.isfinite(t.crack_level):
+            return float(t.crack_level)
+        from .threshold import dark_class_levels
+        lv = dark_class_levels(self.smooth)
+        return float(lv.crack) if np.isfinite(lv.crack) else float(np.percentile(
+            self.smooth[self.region.mask], config.DARKEST_PERCENT))
+
+    @functools.cached_property
+    def evidence(self):
+        """Shape and surroundings of every object (:func:`semkit.reject.object_evidence`)."""
+        from .reject import object_evidence
+        from .threshold import noise_sigma
+        return object_evidence(self.labels, self.n_objects, self.smooth,
+                               crack_level=self.crack_level, noise=noise_sigma(self.smooth),
+                               skeleton=self.skeleton if self.options.length else None,
+                               region=self.region.mask)
+
+    @functools.cached_property
+    def rejected_as(self):
+        """Per object (index = label): why it is not a crack, ``""`` when it is one."""
+        if not self.options.reject or self.n_objects == 0:
+            return pd.Series("", index=np.arange(1, self.n_objects + 1), dtype=object)
+        from .reject import reject_objects
+        return reject_objects(self.evidence)
+
+    @functools.cached_property
+    def _classified_objects(self):
+        o = self.objects.copy()
+        o["rejected_as"] = self.rejected_as.reindex(o["crack_id"]).fillna("").to_numpy()
+        if self.options.exclude_pores:
+            o.loc[o["is_pore"].to_numpy(bool), "rejected_as"] = ""
+        return o
+
+    @functools.cached_property
+    def cracks(self):
+        """Objects that are cracks: no pore (with ``exclude_pores``), nothing rejected."""
+        o = self._classified_objects
+        keep = o["rejected_as"] == ""
+        if self.options.exclude_pores:
+            keep &= ~o["is_pore"]
+        return o[keep].reset_index(drop=True)
+
+    @functools.cached_property
+    def rejected(self):
+        """Objects rejected as not cracks, with ``rejected_as`` (see :mod:`semkit.reject`)."""
+        o = self._classified_objects
+        return o[o["rejected_as"] != ""].reset_index(drop=True)
+
+    @functools.cached_property
+    def crack_labels(self):
+        """Labels of cracks only (pores set to 0); ids match ``cracks.crack_id``."""
+        keep = np.zeros(self.n_objects + 1, bool)
+        keep[self.cracks["crack_id"].to_numpy()] = True
+        return np.where(keep[self.labels], self.labels, 0).astype(np.int32)
+
+    # stage 8: grains
+    @functools.cached_property
+    def grain_map(self):
+        """``(grain_labels, phase_labels, grains)`` or None without ``options.grains``."""
+        if not self.options.grains:
+            return None
+        from .grains import grains_stage, parse_minerals
+        names, n = parse_minerals(self.options.minerals)
+        lab, ph, g = grains_stage(self.flat, mask=self.object_mask | ~self.region.mask,
+                                  pixel_size_um=self.pixel_size_um, names=names, n_phases=n,
+                                  seed=self.seed, alt_image=self._work_image)
+        g.insert(0, "image", self.name)
+        return lab, ph, g
+
+    # stage 7: crack types
+    @property
+    def typing_post(self):
+        """True when this image's cracks are typed tensile / shear / mixed (see
+        :attr:`AnalysisOptions.classify`: by default only on loaded stages of the manifest)."""
+        c = self.options.classify
+        if c is None:
+            return self.stage in LOADED_STAGES
+        return bool(c) and self.stage != "pre-test"
+
+    @functools.cached_property
+    def typed_cracks(self):
+        """``cracks`` with types, confidences, features and ``area_pv_um2`` (stage 7)."""
+        if not (self.typing_post or self.grain_map is not None):
+            return self.cracks
+        from .classify import classify_stage, load_model
+        model = load_model(self.options.crack_model) if self.options.crack_model else None
+        th = None if self.options.segmenter is not None else self.thresholded
+        return classify_stage(self.cracks, self.crack_labels, grey=self.smooth,
+                              pixel_size_um=self.pixel_size_um, model=model,
+                              post=self.typing_post,
+                              grain_labels=None if self.grain_map is None else self.grain_map[0],
+                              skeleton=self.skeleton,
+                              background=None if th is None else th.background,
+                              crack_level=None if th is None else th.crack_level)
+
+    def full_size(self, a):
+        """``a`` (an array of ``image``'s shape) padded back to the raw image's shape: the
+        cropped data bar rows are 0."""
+        bar = self.data_bar
+        if bar is None:
+            return a
+        out = np.zeros(self.raw_image.shape, a.dtype)
+        if bar.side == "top":
+            out[bar.row1:] = a
+        else:
+            out[:bar.row0] = a
+        return out
+
+    def crack_rows(self) -> pd.DataFrame:
+        """The rows this image contributes to ``cracks.csv``: the cracks, then the rejected
+        objects (``rejected_as`` says why; they count in no sum)."""
+        rej = self.rejected
+        if not len(rej):
+            return self.typed_cracks
+        rej = rej.assign(type_post="unknown", type_pre="unknown", confidence=np.nan)
+        return pd.concat([self.typed_cracks, rej], ignore_index=True)
+
+    def _damage_fields(self):
+        nan = float("nan")
+        status = "pre-test" if self.stage == "pre-test" else None
+        if not self.typing_post:
+            return dict(area_T_um2=nan, area_S_um2=nan, area_M_um2=nan, P=nan,
+                        P_status=status or "not_classified")
+        c = self.typed_cracks
+        if not len(c):
+            return dict(area_T_um2=0.0, area_S_um2=0.0, area_M_um2=0.0, P=nan,
+                        P_status="no_cracks")
+        from .damage import image_damage
+        d = image_damage(c.assign(image=self.name)).iloc[0]
+        return dict(area_T_um2=float(d.area_T_um2), area_S_um2=float(d.area_S_um2),
+                    area_M_um2=float(d.area_mixed_um2), P=float(d.P), P_status=d.P_status,
+                    P_low=float(d.get("P_low", nan)), P_high=float(d.get("P_high", nan)),
+                    P_note=str(d.get("P_note", "")))
+
+    def summary(self) -> dict:
+        """The row this image contributes to ``images.csv`` (``seconds`` is set by the caller).
+
+        ``area_T_um2, area_S_um2, area_M_um2, P, P_status`` come from the crack types
+        (P = A_T/A_S, Equ. 3-1); NaN with a status when the image is not typed.
+        """
+        c = self.cracks
+        o = self.objects
+        pores = o[o["is_pore"] & (self._classified_objects["rejected_as"] == "")] \
+            if self.options.exclude_pores else o.iloc[:0]
+        area = float(c["area_um2"].sum())
+        reg = self.region
+        image_area = float(reg.mask.sum()) * self.pixel_size_um ** 2
+        nan = float("nan")
+        length = float(c["length_um"].sum()) if self.options.length else nan
+        row = dict(image=self.name, pixel_size_um=self.pixel_size_um,
+                   pixel_size_source=self.pixel_size_source, **self._threshold_fields(),
+                   n_cracks=int(len(c)), crack_area_um2=area,
+                   crack_length_um=length, area_T_um2=nan, area_S_um2=nan, P=nan, seconds=nan,
+                   image_area_um2=image_area, crack_area_fraction=area / image_area,
+                   crack_density_per_mm=length / image_area * 1e3,
+                   n_thin=int(c["thin"].sum()), n_pores=int(len(pores)),
+                   n_rejected=int(len(self.rejected)),
+                   pore_area_um2=float(pores["area_um2"].sum()),
+                   width_px=int(self.image.shape[1]), height_px=int(self.image.shape[0]),
+                   flatten=self.options.flatten, despeckle=self.options.despeckle, error="")
+        bar = self.data_bar
+        row.update(roi=reg.kind, roi_fraction=reg.fraction, roi_ok=reg.ok,
+                   data_bar_rows=f"{bar.row0}-{bar.row1}" if bar else "",
+                   pixel_size_note=self.pixel_size_note)
+        row.update(self._damage_fields())
+        row.update(self._validity(row))
+        return row
+
+    def _threshold_fields(self):
+        seg = self.options.segmenter
+        if seg is not None:
+            return dict(threshold_method="segmenter", threshold_value=float(seg.threshold),
+                        threshold_ok=True, threshold_note="")
+        t = self.thresholded
+        return dict(threshold_method=t.method, threshold_value=t.value, threshold_ok=bool(t.ok),
+                    threshold_note=t.note)
+
+    def _validity(self, row):
+        """``valid`` and ``valid_note``: False with the reasons when a number of the row is
+        not to be trusted (threshold check failed, sample region too small, ...)."""
+        notes = []
+        if not row["threshold_ok"]:
+            notes.append(f"threshold: {row['threshold_note']}")
+        if not row["roi_ok"]:
+            notes.append(f"roi: {self.region.note}")
+        if row["pixel_size_note"]:
+            notes.append(f"pixel size: {row['pixel_size_note']}")
+        return dict(valid=not notes, valid_note="; ".join(notes))
+
+
+def analyse_image(image, *, pixel_size_um=config.DEFAULT_PIXEL_SIZE_UM, name="",
+                  pixel_size_source="cli", stage=None, seed=None, **options) -> CrackAnalysis:
+    """Analyse one grey image (lazy: stages run when their output is read).
+
+    Parameters
+    ----------
+    image : (M, N) ndarray
+        Grey (or RGB) image, cracks dark.
+    pixel_size_um : float
+    name : str
+        Image name written in the tables.
+    pixel_size_source : str
+        Where the pixel size came from (written in ``images.csv``).
+    stage : str, optional
+        Loading stage (``manifest.csv``): ``pre-test`` images are not typed tensile / shear.
+    seed : int, optional
+        Seed of the grain stage.
+    **options
+        Fields of :class:`AnalysisOptions` (``threshold="auto"``, ``flatten=...``, ...).
+
+    Returns
+    -------
+    analysis : CrackAnalysis
+        ``analysis.cracks`` (per crack), ``analysis.summary()`` (per image),
+        ``analysis.crack_labels`` and ``analysis.skeleton`` for later stages.
+
+    Examples
+    --------
+    >>> img = np.full((64, 64), 180, np.uint8); img[20:24, 5:60] = 30
+    >>> a = analyse_image(img, pixel_size_um=2.0, threshold="otsu", flatten="none")
+    >>> len(a.cracks), float(a.cracks.area_um2.iloc[0])
+    (1, 880.0)
+    """
+    return CrackAnalysis(image, pixel_size_um=pixel_size_um, pixel_size_source=pixel_size_source,
+                         name=name, options=AnalysisOptions(**options), stage=stage, seed=seed)

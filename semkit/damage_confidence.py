@@ -1,0 +1,126 @@
+"""How sure an image's P = A_T / A_S is: a band from the calibrated crack-type probabilities,
+and the ``low_confidence`` flag.
+
+Every crack group has calibrated probabilities of being tensile, shear or mixed
+(:func:`semkit.classify.classify_post`). Drawing each group's type from them ``N_DRAWS`` times
+(fixed seed) and recomputing P each time gives the spread of P that the typing uncertainty
+alone causes; ``P_low``, ``P_high`` are its ``P_BAND`` quantiles. P is reported with
+``P_status = low_confidence`` (and a ``P_note`` saying why) when
+
+* the band is wider than ``P_SPREAD_MAX`` (P_high / P_low), or P is undefined (no shear) in
+  more than 10 % of the draws, or
+* cracks whose morphology lies outside what the typing model was trained on
+  (``type_post_ok = False``) hold more than ``UNTRUSTED_AREA_MAX`` of the typed area.
+
+The areas themselves (detection) are taken as measured; the band is the typing's part of the
+uncertainty only.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["p_confidence", "N_DRAWS", "P_BAND", "P_SPREAD_MAX", "UNTRUSTED_AREA_MAX"]
+
+N_DRAWS = 400
+P_BAND = (0.1, 0.9)
+P_SPREAD_MAX = 2.0
+UNTRUSTED_AREA_MAX = 0.25
+_SEED = 0
+_NO_SHEAR_DRAWS_MAX = 0.1
+
+
+def _draw_areas(area, prob, mixed, tensile_fraction, rng):
+    """A_T and A_S of N_DRAWS type draws (groups x draws)."""
+    u = rng.random((N_DRAWS, len(area)))
+    cum = np.cumsum(prob, axis=1)
+    k = (u[:, :, None] > cum[None, :, :-1]).sum(axis=2)   # 0 tensile, 1 shear, 2 mixed
+    ft = {"exclude": 0.0, "tensile": 1.0, "shear": 0.0}.get(mixed)
+    f_m_t = tensile_fraction if mixed == "split" else np.full(len(area), ft)
+    f_m_s = 1 - tensile_fraction if mixed == "split" else np.full(
+        len(area), 1.0 if mixed == "shear" else 0.0)
+    a_t = ((k == 0) * area + (k == 2) * area * f_m_t).sum(axis=1)
+    a_s = ((k == 1) * area + (k == 2) * area * f_m_s).sum(axis=1)
+    return a_t, a_s
+
+
+def p_confidence(area, prob, *, trusted=None, group=None, mixed="exclude",
+                 tensile_fraction=None, notes=None):
+    """P band, status and note of one image from its cracks' areas and type probabilities.
+
+    Parameters
+    ----------
+    area : (n,) array_like of float
+        Crack areas (any unit).
+    prob : (n, 3) array_like of float
+        P(tensile), P(shear), P(mixed) of each crack (rows sum to 1; a crack typed by the
+        user is one-hot).
+    trusted : (n,) array_like of bool, optional
+        ``type_post_ok`` of each crack.
+    group : (n,) array_like of int, optional
+        Group of each crack (``group_id``): the cracks of one group share one draw.
+    mixed : str
+        As :func:`semkit.damage.image_damage`.
+    tensile_fraction : (n,) array_like of float, optional
+        Tensile share of a mixed crack (``mixed="split"``).
+    notes : (n,) array_like of str, optional
+        ``type_note`` of each crack (that of the largest untrusted crack is quoted).
+
+    Returns
+    -------
+    result : dict
+        ``P_low, P_high`` (NaN when the band is undefined), ``low_confidence`` (bool) and
+        ``note`` (str, empty when confident).
+
+    Examples
+    --------
+    >>> r = p_confidence([100, 50], [[0.99, 0.01, 0], [0.01, 0.99, 0]])
+    >>> round(r["P_low"], 2), round(r["P_high"], 2), r["low_confidence"]
+    (2.0, 2.0, False)
+    >>> p_confidence([100, 50], [[0.6, 0.4, 0], [0.4, 0.6, 0]])["low_confidence"]
+    True
+    """
+    area = np.asarray(area, float)
+    prob = np.clip(np.nan_to_num(np.asarray(prob, float).reshape(-1, 3), nan=1 / 3), 0, 1)
+    prob = prob / np.maximum(prob.sum(axis=1, keepdims=True), 1e-12)
+    n = len(area)
+    trusted = np.ones(n, bool) if trusted is None else np.asarray(trusted, bool)
+    tf = np.full(n, 0.5) if tensile_fraction is None else np.nan_to_num(
+        np.asarray(tensile_fraction, float), nan=0.5)
+    if group is not None and n:
+        _, inv = np.unique(np.asarray(group), return_inverse=True)
+        t_area = np.bincount(inv, weights=area)
+        t_prob = np.zeros((inv.max() + 1, 3))
+        np.add.at(t_prob, inv, prob * area[:, None])
+        t_prob /= np.maximum(t_area[:, None], 1e-12)
+        t_tf = np.bincount(inv, weights=tf * area) / np.maximum(t_area, 1e-12)
+    else:
+        t_area, t_prob, t_tf = area, prob, tf
+    out = dict(P_low=float("nan"), P_high=float("nan"), low_confidence=False, note="")
+    if n == 0 or area.sum() <= 0:
+        return out
+    a_t, a_s = _draw_areas(t_area, t_prob, mixed, t_tf, np.random.default_rng(_SEED))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        p = np.where(a_s > 0, a_t / a_s, np.inf)
+    no_shear = float(np.mean(a_s <= 0))
+    lo, hi = np.quantile(p, P_BAND)
+    out.update(P_low=float(lo) if np.isfinite(lo) else float("nan"),
+               P_high=float(hi) if np.isfinite(hi) else float("nan"))
+    reasons = []
+    untrusted = float(area[~trusted].sum() / area.sum())
+    if untrusted > UNTRUSTED_AREA_MAX:
+        main = ""
+        if notes is not None:  # the reason of the largest untrusted crack
+            bad = np.flatnonzero(~trusted & (np.asarray(notes, dtype=object) != ""))
+            main = str(notes[bad[np.argmax(area[bad])]]) if bad.size else ""
+        reasons.append(f"cracks untyped by the model hold {untrusted:.0%} of the typed area"
+                       + (f" (largest: {main})" if main else ""))
+    if no_shear > _NO_SHEAR_DRAWS_MAX:
+        reasons.append(f"no shear area in {no_shear:.0%} of the type draws")
+    elif lo > 0 and hi / lo > P_SPREAD_MAX:
+        reasons.append(f"type uncertainty: P {P_BAND[0]:.0%}-{P_BAND[1]:.0%} band "
+                       f"{lo:.3g}..{hi:.3g} ({hi / lo:.1f}x wide)")
+    elif not lo > 0:
+        reasons.append("type uncertainty: P may be 0")
+    out["low_confidence"] = bool(reasons)
+    out["note"] = "; ".join(reasons)
+    return out

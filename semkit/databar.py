@@ -1,0 +1,354 @@
+"""The information bar that SEMs write under (or over) a micrograph, and its scale bar.
+
+Zeiss, Thermo/FEI, TESCAN and JEOL instruments save the micrograph with a band of full-width
+rows holding text (voltage, working distance, magnification, date) and a scale bar: a solid
+horizontal line with its length written beside it ("200 µm"). :func:`find_data_bar` finds the
+band: a run of rows from the bottom (or top) edge where most pixels of every third of the width
+share the row's modal grey (a flat background with text on it), beginning abruptly. The sample
+above it never looks like that (texture and noise), and neither do the black corners of a round
+core, whose middle third is sample.
+
+:func:`read_scale_bar` finds the longest solid horizontal line in the band and reads the label
+next to it with a small template OCR (glyphs rendered from the DejaVu fonts shipped with
+matplotlib, compared by normalised correlation on size-normalised binary glyphs): digits,
+``.``, and the units ``nm``, ``µm`` (or ``um``), ``mm``. The pixel size is the written length
+over the line's length in pixels. A label read with low glyph confidence is not used.
+"""
+from __future__ import annotations
+
+import dataclasses
+import functools
+import re
+
+import numpy as np
+
+from . import config
+
+__all__ = ["DataBar", "ScaleBar", "DataBarCrop", "find_data_bar", "read_scale_bar",
+           "crop_data_bar"]
+
+_GLYPHS = "0123456789.µmnu"
+_GLYPH_SIZE = (24, 16)  # rows, cols of the normalised glyph
+_UNIT_UM = {"nm": 1e-3, "µm": 1.0, "um": 1.0, "mm": 1e3}
+
+
+@dataclasses.dataclass
+class DataBar:
+    """Rows ``[row0, row1)`` of an information bar at the image's ``side`` (bottom or top)."""
+
+    row0: int
+    row1: int
+    side: str
+    background: float  #: modal grey of the bar
+
+
+@dataclasses.dataclass
+class ScaleBar:
+    """A scale bar read from a data bar."""
+
+    length_px: float        #: length of the line, px
+    text: str               #: the label as read
+    length_um: float        #: the label's length in µm (NaN if unreadable)
+    confidence: float       #: lowest glyph correlation of the label (0-1)
+    box: tuple              #: (row0, col0, row1, col1) of the line in the image
+
+    @property
+    def pixel_size_um(self):
+        return self.length_um / self.length_px if self.length_px > 0 else float("nan")
+
+
+@dataclasses.dataclass
+class DataBarCrop:
+    """An image without its data bar, and the pixel size after reading the scale bar."""
+
+    image: np.ndarray
+    bar: DataBar | None
+    scale_bar: ScaleBar | None
+    pixel_size_um: float
+    pixel_size_source: str
+    note: str = ""          #: why the scale bar was not used, or how it disagrees
+
+
+def _to_u8(image):
+    a = np.asarray(image, np.float32)
+    lo, hi = float(a.min()), float(a.max())
+    return np.zeros(a.shape, np.uint8) if hi <= lo else \
+        np.clip((a - lo) * (255.0 / (hi - lo)), 0, 255).astype(np.uint8)
+
+
+def _row_flatness(u8, tol):
+    """Per row: the least share, over the thirds of the width, of pixels within ``tol`` of the
+    row's mode; the share over the whole row; the mode."""
+    h, w = u8.shape
+    q = (u8 >> 2).astype(np.int64)  # 64 bins
+    counts = np.zeros((h, 64), np.int64)
+    np.add.at(counts, (np.repeat(np.arange(h), w), q.ravel()), 1)
+    mode = counts.argmax(axis=1) * 4 + 2
+    near = np.abs(u8.astype(np.int16) - mode[:, None]) <= tol
+    thirds = [near[:, k * w // 3:(k + 1) * w // 3].mean(axis=1) for k in range(3)]
+    return np.min(thirds, axis=0), near.mean(axis=1), mode
+
+
+def find_data_bar(image, *, min_flat=config.DATABAR_MIN_FLAT):
+    """Find an SEM information bar along the bottom or top edge.
+
+    Bar rows, counted from the edge: at least ``min_flat`` of the row's pixels are at its
+    modal grey, that mode is the bar's background (the mode of the edge row), and in most of
+    them this holds in every third of the width. Rows of text or a thick scale bar may
+    interrupt the run for at most ``DATABAR_MAX_GAP_ROWS``. The run must end abruptly (the
+    next rows are textured sample) and carry ink: pixels at the other end of the grey scale
+    (white text on a dark bar, dark text on a light one).
+
+    Parameters
+    ----------
+    image : (M, N) ndarray
+        The micrograph as saved by the microscope.
+    min_flat : float
+        Least share of each third of a bar row that holds the bar's background grey.
+
+    Returns
+    -------
+    bar : DataBar or None
+
+    Examples
+    --------
+    >>> rng = np.random.default_rng(0)
+    >>> img = rng.integers(60, 200, (120, 160)).astype(np.uint8)
+    >>> img[100:] = 0; img[106:112, 20:70] = 255   # a black bar with a white scale bar
+    >>> b = find_data_bar(img); (b.row0, b.row1, b.side)
+    (100, 120, 'bottom')
+    """
+    u8 = _to_u8(image)
+    h = u8.shape[0]
+    if h < 40 or u8.shape[1] < 40:
+        return None
+    step = max(u8.shape[1] // 1024, 1)
+    thirds, flat, mode = _row_flatness(np.ascontiguousarray(u8[:, ::step]),
+                                       config.DATABAR_TOL_GREY)
+    tol = config.DATABAR_TOL_GREY + 2
+    for side in ("bottom", "top"):
+        fl = flat[::-1] if side == "bottom" else flat
+        th = thirds[::-1] if side == "bottom" else thirds
+        md = mode[::-1] if side == "bottom" else mode
+        ref = int(md[0])
+        is_bar = (fl >= min_flat) & (np.abs(md - ref) <= tol)
+        n, gap = 0, 0
+        for k, b in enumerate(is_bar):
+            if b:
+                n, gap = k + 1, 0
+            else:
+                gap += 1
+                if gap > config.DATABAR_MAX_GAP_ROWS:
+                    break
+        if n < max(config.DATABAR_MIN_ROWS, int(config.DATABAR_MIN_FRACTION * h)) or \
+                n > config.DATABAR_MAX_FRACTION * h:
+            continue
+        # an abrupt start: the rows just past the bar are sample (a round core's corners fade),
+        # and the background spans the width in most bar rows (a core's corner does not)
+        if fl[n:n + 3].max(initial=0.0) > config.DATABAR_SAMPLE_FLAT or \
+                np.mean(th[:n] >= min_flat) < 0.5:
+            continue
+        r0, r1 = (h - n, h) if side == "bottom" else (0, n)
+        # a bar carries text or a scale bar at the other end of the grey scale
+        rows = u8[r0:r1]
+        ink = rows >= 255 - config.DATABAR_INK_GREY if ref < 128 else \
+            rows <= config.DATABAR_INK_GREY
+        if ink.mean() < config.DATABAR_MIN_INK:
+            continue
+        return DataBar(r0, r1, side, float(ref))
+    return None
+
+
+@functools.lru_cache(maxsize=1)
+def _templates():
+    """Normalised binary glyphs of :data:`_GLYPHS` in the DejaVu fonts of matplotlib."""
+    import os
+
+    import matplotlib
+    from PIL import Image, ImageDraw, ImageFont
+    base = os.path.join(os.path.dirname(matplotlib.__file__), "mpl-data", "fonts", "ttf")
+    names, vecs, aspects = [], [], []
+    for fname in ("DejaVuSans.ttf", "DejaVuSans-Bold.ttf", "DejaVuSansMono.ttf"):
+        font = ImageFont.truetype(os.path.join(base, fname), 48)
+        for ch in _GLYPHS:
+            im = Image.new("L", (80, 90), 0)
+            ImageDraw.Draw(im).text((10, 5), ch, fill=255, font=font)
+            g = np.asarray(im) > 127
+            v, asp = _normalise(g)
+            names.append(ch)
+            vecs.append(v)
+            aspects.append(asp)
+    return names, np.array(vecs), np.array(aspects)
+
+
+def _normalise(glyph):
+    import cv2
+    rr, cc = np.nonzero(glyph)
+    g = glyph[rr.min():rr.max() + 1, cc.min():cc.max() + 1].astype(np.float32)
+    asp = g.shape[1] / g.shape[0]
+    r = cv2.resize(g, _GLYPH_SIZE[::-1], interpolation=cv2.INTER_AREA).ravel()
+    r = r - r.mean()
+    return r / (np.linalg.norm(r) + 1e-9), asp
+
+
+def _words(glyphs):
+    """Group glyph boxes ``(r0, c0, r1, c1, id)`` into words: same text line (vertical
+    overlap), horizontal gaps under one glyph height; each word sorted by x."""
+    glyphs = sorted(glyphs, key=lambda g: g[1])
+    lines = []
+    for g in glyphs:
+        for ln in lines:
+            r0, r1 = min(x[0] for x in ln), max(x[2] for x in ln)
+            if min(r1, g[2]) - max(r0, g[0]) > 0.3 * min(r1 - r0, g[2] - g[0]) or \
+                    (g[2] - g[0] < 0.35 * (r1 - r0) and r0 <= g[2] <= r1 + 2):
+                ln.append(g)
+                break
+        else:
+            lines.append([g])
+    words = []
+    for ln in lines:
+        ln.sort(key=lambda g: g[1])
+        height = max(g[2] - g[0] for g in ln)
+        cur = [ln[0]]
+        for g in ln[1:]:
+            if g[1] - max(x[3] for x in cur) > config.SCALEBAR_WORD_GAP * height:
+                words.append(cur)
+                cur = [g]
+            else:
+                cur.append(g)
+        words.append(cur)
+    return words
+
+
+def _read_glyphs(boxes, height):
+    """OCR of glyph boxes (sorted by x): text and the lowest correlation."""
+    names, vecs, aspects = _templates()
+    text, conf, prev_x1 = "", 1.0, None
+    for (r0, c0, r1, c1), g in boxes:
+        h = r1 - r0
+        if h < 0.35 * height and (c1 - c0) < 0.5 * height:
+            ch, c = ".", 1.0
+        else:
+            v, asp = _normalise(g)
+            score = vecs @ v - 0.5 * np.abs(np.log(aspects / asp))
+            k = int(np.argmax(score))
+            ch, c = names[k], float(vecs[k] @ v)
+        if prev_x1 is not None and c0 - prev_x1 > 0.45 * height:
+            text += " "
+        text += ch
+        conf = min(conf, c)
+        prev_x1 = c1
+    return text, conf
+
+
+def read_scale_bar(image, bar):
+    """Find the scale bar in a data bar and read its label.
+
+    Parameters
+    ----------
+    image : (M, N) ndarray
+        The full micrograph.
+    bar : DataBar
+
+    Returns
+    -------
+    scale : ScaleBar or None
+        None when no solid horizontal line is found; ``length_um`` NaN when its label cannot
+        be read as ``<number> <nm|µm|um|mm>``.
+    """
+    import cv2
+    u8 = _to_u8(image)[bar.row0:bar.row1]
+    fg = (u8 >= 255 - config.DATABAR_INK_GREY if bar.background < 128
+          else u8 <= config.DATABAR_INK_GREY).astype(np.uint8)
+    n, lab, st, _ = cv2.connectedComponentsWithStats(fg, connectivity=8)
+    bh, w_img = u8.shape
+    lines = []
+    for k in range(1, n):
+        x, y, w, h, _ = (int(v) for v in st[k])
+        if w < config.SCALEBAR_MIN_FRACTION * w_img or w < 6 * h or h > 0.35 * bh:
+            continue
+        rows = (lab[y:y + h, x:x + w] == k).sum(axis=1)
+        if rows.max() >= 0.95 * w:  # a solid line (end ticks only make the box taller)
+            lines.append((k, float(rows.max())))
+    if not lines:
+        return None
+    k, length = max(lines, key=lambda t: t[1])
+    x0, y0, w, h = (int(v) for v in st[k, :4])
+    # glyphs: ink components of text size (at a third of the contrast, so thin anti-aliased
+    # strokes and small dots hold together; touching pieces merged), grouped into words
+    half = (np.abs(u8.astype(np.int16) - int(bar.background)) > 85).astype(np.uint8)
+    half[lab == k] = 0
+    n2, lab2, st2, _ = cv2.connectedComponentsWithStats(half, connectivity=8)
+    glyphs = []
+    for j in sorted(range(1, n2), key=lambda i: st2[i, 0]):
+        gx, gy, gw, gh, _ = (int(v) for v in st2[j])
+        if gh > 0.6 * bh or gw > 3 * max(gh, 1) or gh * gw < 2:
+            continue
+        g = (gy, gx, gy + gh, gx + gw, (j,))
+        p = glyphs[-1] if glyphs else None
+        if p is not None and gx - p[3] <= 1 and min(p[2], g[2]) - max(p[0], g[0]) > \
+                0.5 * min(p[2] - p[0], gh) and \
+                gx + gw - p[1] <= 1.5 * (max(p[2], gy + gh) - min(p[0], gy)):
+            glyphs[-1] = (min(p[0], gy), p[1], max(p[2], gy + gh), max(p[3], gx + gw),
+                          p[4] + (j,))
+        else:
+            glyphs.append(g)
+    words = _words(glyphs)
+    best = None
+    for word in words:
+        boxes = [((g[0], g[1], g[2], g[3]), np.isin(lab2[g[0]:g[2], g[1]:g[3]], g[4]))
+                 for g in word]
+        height = float(max(g[2] - g[0] for g in word))
+        text, conf = _read_glyphs(boxes, height)
+        m = re.fullmatch(r"(\d+(?:\.\d+)?) ?(nm|µm|um|mm)", text)
+        if not m:
+            continue
+        cy = (min(g[0] for g in word) + max(g[2] for g in word)) / 2
+        cx = (min(g[1] for g in word) + max(g[3] for g in word)) / 2
+        dist = abs(cy - (y0 + h / 2)) + max(0.0, abs(cx - (x0 + w / 2)) - w / 2)
+        if best is None or dist < best[0]:
+            best = (dist, text, conf, float(m.group(1)) * _UNIT_UM[m.group(2)])
+    if best is None:
+        text, conf, length_um = "", 0.0, float("nan")
+    else:
+        _, text, conf, length_um = best
+        if conf < config.SCALEBAR_MIN_CONFIDENCE:
+            length_um = float("nan")
+    return ScaleBar(length, text, length_um, conf,
+                    (bar.row0 + y0, x0, bar.row0 + y0 + h, x0 + w))
+
+
+def crop_data_bar(image, *, pixel_size_um, pixel_size_source):
+    """Crop the data bar and take the pixel size from its scale bar when none was known.
+
+    Parameters
+    ----------
+    image : (M, N) ndarray
+    pixel_size_um : float
+    pixel_size_source : str
+        Where ``pixel_size_um`` came from; only ``default`` is replaced by the scale bar
+        (source ``scale_bar``). A given pixel size is kept, and a scale bar disagreeing by more
+        than ``SCALEBAR_AGREE_FRACTION`` is said in ``note``.
+
+    Returns
+    -------
+    crop : DataBarCrop
+    """
+    bar = find_data_bar(image)
+    if bar is None:
+        return DataBarCrop(image, None, None, pixel_size_um, pixel_size_source)
+    img = np.ascontiguousarray(image[bar.row1:] if bar.side == "top" else image[:bar.row0])
+    sb = read_scale_bar(image, bar)
+    out = DataBarCrop(img, bar, sb, pixel_size_um, pixel_size_source)
+    if sb is None:
+        return out
+    if not np.isfinite(sb.length_um):
+        out.note = f"scale bar label unreadable ({sb.text!r})"
+        return out
+    px = sb.pixel_size_um
+    if pixel_size_source == "default":
+        out.pixel_size_um, out.pixel_size_source = px, "scale_bar"
+    elif abs(px / pixel_size_um - 1) > config.SCALEBAR_AGREE_FRACTION:
+        out.note = (f"scale bar ({sb.text.strip()} over {sb.length_px:.0f} px) gives "
+                    f"{px:.4g} um/px, not {pixel_size_um:.4g}")
+    return out

