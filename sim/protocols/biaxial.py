@@ -21,6 +21,8 @@ import numpy as np
 
 from .. import analysis
 from ..config import THICKNESS
+from ..state import R
+from . import gauges as gg
 from . import loading as ld
 from . import resume as rs
 from .outputs import write_results
@@ -291,7 +293,12 @@ def run_biaxial(specimen, *, confinement: float = DEFAULT_CONFINEMENT,
                         np.asarray(start.wall_position(right))[0],
                         np.asarray(start.wall_position(bot))[1],
                         np.asarray(start.wall_position(top))[1]])
-    gauge = ld.gauge_indices(x0, y0, cur_box)
+    gauge = gg.gauge_indices(x0, y0, cur_box)
+    gmask = np.zeros(x0.size, bool)
+    gmask[gauge] = True
+    garea = gg.cell_area(x0, y0, gauge)
+    ends = gg.end_indices(y0, np.asarray(start.state.pf[R]), cur_box)
+    speed_now = [0.0]
     c_start = ld.crack_tally(start)
     chunk, max_steps = ld.loop_steps(strain_rate, dt, record_strain=record_strain,
                                      ramp_records=ramp_records, max_strain=max_strain,
@@ -301,6 +308,7 @@ def run_biaxial(specimen, *, confinement: float = DEFAULT_CONFINEMENT,
 
     def on_chunk(k):
         f = min(1.0, (k + 1) / max(1, ramp_records))
+        speed_now[0] = f * v
         sim.set_wall_velocity(bot, 0.0, f * v)
         sim.set_wall_velocity(top, 0.0, -f * v)
         h, _ = sizes()
@@ -313,7 +321,8 @@ def run_biaxial(specimen, *, confinement: float = DEFAULT_CONFINEMENT,
         el = (w0 - w) / w0
         s1 = ld.platen_force(sim, bot, top, 1) / (w * THICKNESS)
         s3 = ld.platen_force(sim, left, right, 0) / (h * THICKNESS)
-        gl, ga = ld.gauge_strains(x0, y0, sim.x, sim.y, gauge)
+        gl, ga = gg.gauge_strains(x0, y0, sim.x, sim.y, gauge)
+        gsx, gsy = gg.gauge_stress(sim, gmask, garea)
         c = ld.crack_tally(sim)
         ek, es = ld.energies(sim)
         return {"step": int(sim.step), "time_s": float(sim.time), "axial_strain": ea,
@@ -322,7 +331,11 @@ def run_biaxial(specimen, *, confinement: float = DEFAULT_CONFINEMENT,
                 **{f"cracks_{k}": c[k] for k in analysis.CRACK_KINDS},
                 "cracks_total": c["total"], "kinetic_energy_j": ek, "strain_energy_j": es,
                 "deviatoric_stress_mpa": (s1 - s3) / 1e6, "gauge_axial_strain": ga,
-                "gauge_lateral_strain": gl, "cracks_loading": c["total"] - c_start["total"]}
+                "gauge_lateral_strain": gl, "gauge_stress_xx_mpa": gsx / 1e6,
+                "gauge_stress_yy_mpa": gsy / 1e6,
+                "end_axial_strain": gg.layer_strain(y0, sim.y, *ends),
+                "platen_velocity_m_per_s": speed_now[0],
+                "cracks_loading": c["total"] - c_start["total"]}
 
     options = dict(**stage1_opts, strain_rate_per_s=strain_rate,
                    platen_velocity_m_per_s=v, post_peak=post_peak, max_strain=max_strain,
@@ -345,7 +358,10 @@ def run_biaxial(specimen, *, confinement: float = DEFAULT_CONFINEMENT,
         n = specimen.n_particles
         summary["particle_steps_per_s"] = n * summary["steps"] / summary["wall_s"]
         if len(hist) > 2:
-            dev = compression_summary(hist, stress_col="deviatoric_stress_mpa")
+            dev = compression_summary(hist, cracks=cracks, gauge_box=gg.gauge_box(cur_box),
+                                      link=2.1 * float(specimen.r.max()),
+                                      stress_col="deviatoric_stress_mpa",
+                                      first_steady=ramp_records)
             s1 = hist["axial_stress_mpa"].to_numpy(float)
             summary.update(dev)
             summary["deviatoric_peak_mpa"] = dev["ucs_mpa"]

@@ -113,6 +113,9 @@ def register(subparsers):
     p.add_argument("--extra", nargs="+", default=(), metavar="SPECIMEN",
                    help="specimens used only in the seed rounds at the end (held out from "
                         "the search; the mean over all specimens drives the correction)")
+    p.add_argument("--resume", action="store_true",
+                   help="continue an interrupted calibration in --out: finished tests under "
+                        "OUT/runs/ are read back instead of run again")
     p.add_argument("--no-progress", action="store_true")
     p.set_defaults(func=run_calibrate_command)
     return subparsers
@@ -222,7 +225,7 @@ def run_calibrate_command(args) -> int:
                                   max_evaluations=args.max_evaluations,
                                   platen_velocity=args.platen_velocity,
                                   tension_test=args.tension_test, search_on=args.search_on,
-                                  extra=args.extra,
+                                  extra=args.extra, resume=args.resume,
                                   progress=not args.no_progress)
     except KeyboardInterrupt:
         print(f"interrupted: evaluations so far in {args.out}", file=sys.stderr)

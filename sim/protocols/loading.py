@@ -398,6 +398,7 @@ class AdaptiveSpeed:
     strain_key: str = "axial_strain"
     factor: float = 1.0
     _tmax: float = 0.0
+    _cracking: bool = False
 
     def _ke_cap(self, row, target):
         ke, se = row.get("kinetic_energy_j"), row.get("strain_energy_j")
@@ -423,6 +424,9 @@ class AdaptiveSpeed:
         g_crack = math.exp(-c / self.crack_scale)
         g_tan = min(1.0, max(0.0, (T - self.tan_slow) / (self.tan_fast - self.tan_slow)))
         target = 1.0 + (self.f_max - 1.0) * g_crack * g_tan
+        self._cracking = self._cracking or c > 0
+        if self._cracking:              # the fast phase ends at the first crack
+            target = 1.0
         if s[-1] < self.peak_drop * smax:
             target = min(1.0, self.f_peak)
         elif self.f_peak < 1.0 and T < self.tan_peak:

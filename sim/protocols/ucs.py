@@ -17,38 +17,39 @@ import numpy as np
 
 from .. import analysis
 from ..config import THICKNESS
+from . import gauges as gg
 from . import loading as ld
 from . import resume as rs
+from .elastic import elastic_constants
 from .report import TestResult, base_summary, crack_summary
 
 __all__ = ["run_ucs", "compression_summary"]
 
 
-def compression_summary(history, *, stress_col="axial_stress_mpa", e_method="tangent",
+def compression_summary(history, *, cracks=None, gauge_box=None, link=None,
+                        stress_col="axial_stress_mpa", first_steady=0,
                         ci_fraction=analysis.CI_FRACTION) -> dict:
-    """E, ν (gauge), E from the platens, peak, CI, CD from a compression history (report units).
+    """E and ν with their validity (:func:`sim.protocols.elastic.elastic_constants`), peak,
+    CI and CD from a compression history (report units).
 
-    Uses ``gauge_axial_strain``/``gauge_lateral_strain`` for E and ν, ``axial_strain`` for the
-    platen modulus, ``volumetric_strain`` for CD and ``cracks_total`` for CI.
+    Uses ``axial_strain`` (platen gap) for the peak strain, ``volumetric_strain`` for CD and
+    ``cracks_total`` for CI.
     """
     s = history[stress_col].to_numpy(float) * 1e6
-    ga = history["gauge_axial_strain"].to_numpy(float)
-    gl = history["gauge_lateral_strain"].to_numpy(float)
     ea = history["axial_strain"].to_numpy(float)
     ip = analysis.peak_index(s)
-    return {
-        "E_gpa": analysis.young_modulus(ga, s, method=e_method) / 1e9,
-        "nu": analysis.poisson_ratio(ga, gl, s),
-        "E_platen_gpa": analysis.young_modulus(ea, s, method=e_method) / 1e9,
+    out = elastic_constants(history, cracks, gauge_box=gauge_box, link=link,
+                            stress_col=stress_col, first_steady=first_steady)
+    out.update({
         "ucs_mpa": float(s[ip]) / 1e6,
         "ci_mpa": analysis.crack_initiation(s, history["cracks_total"].to_numpy(float),
                                             fraction=ci_fraction) / 1e6,
         "cd_mpa": analysis.crack_damage(s, history["volumetric_strain"].to_numpy(float)) / 1e6,
         "peak_axial_strain": float(ea[ip]),
-        "e_method": f"{e_method} at 50 % of peak, gauge strain",
         "ci_criterion": f"cumulative cracks >= max(1, ceil({ci_fraction} x count at peak))",
         "cd_criterion": "maximum of volumetric strain before the peak",
-    }
+    })
+    return out
 
 
 def run_ucs(specimen, *, strain_rate: float | None = None,
@@ -152,8 +153,13 @@ def run_ucs(specimen, *, strain_rate: float | None = None,
     h0 = float(box[3]) - float(box[2])
     w0 = float(box[1] - box[0])
     strain_rate, v = ld.loading_rate(strain_rate, platen_velocity, h0)
-    gauge = ld.gauge_indices(x0, y0, box)
-    left, right = ld.side_indices(x0, specimen.r, box)
+    gauge = gg.gauge_indices(x0, y0, box)
+    gmask = np.zeros(x0.size, bool)
+    gmask[gauge] = True
+    garea = gg.cell_area(x0, y0, gauge)
+    left, right = gg.side_indices(x0, specimen.r, box)
+    bottom, top = gg.end_indices(y0, specimen.r, box)
+    speed_now = [0.0]
     chunk, max_steps = ld.loop_steps(strain_rate, float(sim.dt), record_strain=record_strain,
                                      ramp_records=ramp_records, max_strain=max_strain,
                                      limit_strain=limit_strain, resumed=prev if resume else None)
@@ -164,14 +170,16 @@ def run_ucs(specimen, *, strain_rate: float | None = None,
 
     def on_chunk(k):
         f = min(1.0, (k + 1) / max(1, ramp_records)) * loop.factor
+        speed_now[0] = f * v
         sim.set_wall_velocity(lo, 0.0, f * v)
         sim.set_wall_velocity(hi, 0.0, -f * v)
 
     def record():
         x, y = sim.x, sim.y
         ea = (h0 - ld.platen_gap(sim, lo, hi)) / h0
-        el = ld.side_lateral_strain(x0, x, left, right)
-        gl, ga = ld.gauge_strains(x0, y0, x, y, gauge)
+        el = gg.layer_strain(x0, x, left, right)
+        gl, ga = gg.gauge_strains(x0, y0, x, y, gauge)
+        gsx, gsy = gg.gauge_stress(sim, gmask, garea)
         c = ld.crack_tally(sim)
         ek, es = ld.energies(sim)
         return {"step": int(sim.step), "time_s": float(sim.time), "axial_strain": ea,
@@ -181,7 +189,9 @@ def run_ucs(specimen, *, strain_rate: float | None = None,
                 **{f"cracks_{k}": c[k] for k in analysis.CRACK_KINDS},
                 "cracks_total": c["total"], "kinetic_energy_j": ek, "strain_energy_j": es,
                 "gauge_axial_strain": ga, "gauge_lateral_strain": gl,
-                "platen_velocity_m_per_s": v * (loop.factor if loop is not None else 1.0)}
+                "gauge_stress_xx_mpa": gsx / 1e6, "gauge_stress_yy_mpa": gsy / 1e6,
+                "end_axial_strain": gg.layer_strain(y0, y, bottom, top),
+                "platen_velocity_m_per_s": speed_now[0]}
 
     options = dict(strain_rate_per_s=strain_rate, platen_velocity_m_per_s=v,
                    post_peak=post_peak, max_strain=max_strain, damping=damping,
@@ -208,7 +218,9 @@ def run_ucs(specimen, *, strain_rate: float | None = None,
         cracks = ld.crack_frame(sim)
         summary = base_summary("ucs", specimen, loop, sim, options)
         if len(hist) > 2:
-            summary.update(compression_summary(hist, e_method=e_method))
+            summary.update(compression_summary(hist, cracks=cracks, gauge_box=gg.gauge_box(box),
+                                               link=2.1 * float(specimen.r.max()),
+                                               first_steady=ramp_records))
         summary.update(crack_summary(cracks))
         res = TestResult(summary=summary, history=hist, cracks=cracks, sim=sim,
                          specimen=specimen)
