@@ -83,9 +83,9 @@ def _verify(args) -> int:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    from .protocols.cli import EXIT_CODES
-    p = argparse.ArgumentParser(prog="gbmsim", description="2D bonded-particle DEM (PFC2D style)",
-                                epilog=EXIT_CODES)
+    from .protocols.cli import EXIT_CODES, OneLineParser
+    p = OneLineParser(prog="gbmsim", description="2D bonded-particle DEM (PFC2D style)",
+                      epilog=EXIT_CODES)
     p.add_argument("--version", action="version", version=f"gbmsim {__version__}")
     sub = p.add_subparsers(dest="command", required=True)
     q = sub.add_parser("info", help="summarise a specimen.npz and its time step")

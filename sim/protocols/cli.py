@@ -9,16 +9,45 @@ here: flags map 1:1 to the options of :func:`sim.protocols.registry.run_test`.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import os
 import sys
+import warnings
 
-__all__ = ["EXIT_CODES", "register", "run_test_command", "run_calibrate_command"]
+__all__ = ["EXIT_CODES", "OneLineParser", "specimen_warnings", "register", "run_test_command",
+           "run_calibrate_command"]
 
 #: The exit codes of every command (README "Exit codes").
 EXIT_CODES = ("Exit codes: 0 ok; 1 a batch with some failures or a check/target missed; 2 bad "
               "input (one line naming the file or field); 3 numerical failure (one line naming "
               "cause, step and hint); 130 interrupted.")
+
+
+
+class OneLineParser(argparse.ArgumentParser):
+    """An argument parser whose usage errors are one stderr line (exit 2)."""
+
+    def error(self, message):
+        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
+
+@contextlib.contextmanager
+def specimen_warnings():
+    """Print each representativeness warning of the tests run inside as one stderr line."""
+    from .skeleton import RepresentativenessWarning
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", RepresentativenessWarning)
+        try:
+            yield
+        finally:
+            seen = []
+            for c in caught:
+                if issubclass(c.category, RepresentativenessWarning) \
+                        and str(c.message) not in seen:
+                    seen.append(str(c.message))
+            for w in seen:
+                print(f"warning: {w}", file=sys.stderr)
 
 
 def _common(p, *, rate=True):
@@ -135,10 +164,7 @@ def _load(args):
 
 def run_test_command(args) -> int:
     """Run one laboratory test (or an ensemble) from parsed arguments; print its numbers."""
-    import warnings
-
     from ..errors import InputError, InstabilityError
-    from .skeleton import RepresentativenessWarning
     try:
         spec = _load(args)
     except InputError as exc:
@@ -169,8 +195,7 @@ def run_test_command(args) -> int:
     if not args.resume:             # resuming writes nothing before its files are checked
         os.makedirs(args.out, exist_ok=True)
     try:
-        with warnings.catch_warnings(record=True) as caught:
-            warnings.simplefilter("always", RepresentativenessWarning)
+        with specimen_warnings():
             if args.ensemble:
                 res = _run_ensemble(args, spec, kw)
             else:
@@ -187,9 +212,6 @@ def run_test_command(args) -> int:
     except (InputError, ValueError, FileNotFoundError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
-    for w in {str(c.message) for c in caught
-              if issubclass(c.category, RepresentativenessWarning)}:
-        print(f"warning: {w}", file=sys.stderr)
     from .outputs import json_ready
     if args.ensemble:
         st = res.stats
@@ -256,7 +278,7 @@ def run_calibrate_command(args) -> int:
 
 def main(argv=None) -> int:
     """Stand-alone entry (``python -m sim.protocols.cli``) for when ``sim.cli`` is absent."""
-    parser = argparse.ArgumentParser(prog="gbmsim")
+    parser = OneLineParser(prog="gbmsim")
     register(parser.add_subparsers(dest="command", required=True))
     args = parser.parse_args(argv)
     return args.func(args)
