@@ -127,7 +127,7 @@ def main(argv=None):
     a = ap.parse_args(argv)
     import numba
 
-    from sim.measure import verification_cases
+    from sim.verify import verification_cases
     rows = []
     for n in a.sizes:
         for t in a.threads:

@@ -70,7 +70,7 @@ def _bench(args) -> int:
 
 
 def _verify(args) -> int:
-    from .measure import verification_cases
+    from .verify import verification_cases
     rows = verification_cases()
     if args.json:
         print(json.dumps(rows, indent=2))

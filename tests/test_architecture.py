@@ -64,3 +64,42 @@ def test_import_does_no_work(pkg):
     assert out.returncode == 0, out.stderr[-2000:]
     if pkg in ("sim", "semkit", "gbmgen"):
         assert int(out.stdout.split()[-1]) > 0  # the check saw the package's kernels
+
+
+def _sim_imports(path):
+    """Modules of ``sim`` that ``path`` imports (relative and absolute, any depth)."""
+    tree = ast.parse(path.read_text(), filename=str(path))
+    pkg = path.relative_to(ROOT).with_suffix("").parts[:-1]
+    for node in ast.walk(tree):
+        if isinstance(node, ast.ImportFrom):
+            base = list(pkg[:len(pkg) - node.level + 1]) if node.level else []
+            mod = ".".join(base + ([node.module] if node.module else []))
+            if mod.split(".")[0] == "sim":
+                if node.module:         # from .x import y: module x (or x.y if a module)
+                    yield mod
+                for a in node.names:
+                    yield f"{mod}.{a.name}"
+
+
+def test_sim_modules_import_no_loop():
+    """No import cycle among the modules of sim (measure <-> simulation was one)."""
+    files = {".".join(f.relative_to(ROOT).with_suffix("").parts): f
+             for f in (ROOT / "sim").rglob("*.py")}
+    files = {k.removesuffix(".__init__"): v for k, v in files.items()}
+    # the package itself (sim/__init__ re-exports) is not an edge of the module graph
+    graph = {m: {d for d in _sim_imports(f) if d in files and d not in (m, "sim")}
+             for m, f in files.items()}
+    state = {}
+
+    def visit(m, path):
+        state[m] = 1
+        for d in sorted(graph[m]):
+            if state.get(d) == 1:
+                raise AssertionError("import cycle: " + " -> ".join(path + [m, d]))
+            if d not in state:
+                visit(d, path + [m])
+        state[m] = 2
+
+    for m in sorted(graph):
+        if m not in state:
+            visit(m, [])

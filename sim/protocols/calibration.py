@@ -19,9 +19,9 @@ import time
 
 from ..calibrate import DEFAULT_TARGETS, calibrate
 from ..errors import InputError, InstabilityError
-from .speed import DEFAULT_TIMESTEP_FACTOR
 from .outputs import json_ready, write_json_atomic, write_text_atomic
 from .parameters import apply_parameters, load_parameters, save_parameters, start_parameters
+from .speed import DEFAULT_TIMESTEP_FACTOR
 
 __all__ = ["make_evaluator", "calibrate_specimens", "report_markdown"]
 

@@ -10,9 +10,10 @@ peak (:data:`sim.analysis.E_WINDOW`, the ISRM tangent modulus at 50 % of the pea
 - **boundary**: the platen stress against the platen displacement (``E_platen``, the platen
   modulus of a laboratory: contact compliance included) and the lateral strain of the side
   layers against the axial strain of the end layers, the particles the platens touch
-  (``nu_boundary``, over the whole height). These are specimen-scale readings of a dynamic loading, so they use only
-  **steady** records: the platen speed unchanged over the last :data:`STEADY_RECORDS` chunks
-  and the kinetic energy below :data:`KE_STEADY` × the strain energy.
+  (``nu_boundary``, over the whole height). These are specimen-scale readings of a dynamic
+  loading, so they use only **steady** records: the platen speed unchanged over the last
+  :data:`STEADY_RECORDS` chunks and the kinetic energy below :data:`KE_STEADY` × the strain
+  energy.
 
 ``E_gpa`` and ``nu`` are the gauge values while no crack crosses the gauge, else the boundary
 values. Flags (``E_ok``, ``nu_ok``, with a ``*_reason``): E needs both moduli and the two

@@ -9,10 +9,10 @@ Two readings, as in a laboratory (compression positive everywhere):
   :func:`cell_area`). Stress and strain of one region obey the material's elastic law at every
   instant, whatever the platens do, so moduli read from the gauge do not depend on the loading
   speed or its changes (a crack crossing the gauge does change them: :func:`crack_crosses`);
-- the **boundary layers**: the particles within one mean diameter of a face. The end layers
-  touch the platens (:func:`end_indices`); their mean distance gives the axial strain over the
-  whole height without the platen contact compliance (:func:`layer_strain`). The side layers give the lateral strain
-  over the whole height.
+- the **boundary layers**: the end layers are the particles the platens touch
+  (:func:`end_indices`); their mean distance gives the axial strain over the whole height
+  without the platen contact compliance (:func:`layer_strain`). The side layers, the particles
+  within one mean diameter of a side face, give the lateral strain over the whole height.
 """
 from __future__ import annotations
 
