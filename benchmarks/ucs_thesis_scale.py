@@ -45,7 +45,7 @@ def _probe(spec, a):
            "platen_velocity_m_per_s": v, "timestep_factor": factor,
            "stop_strain_assumed": a.stop_strain, "steps_needed_estimate": steps,
            "full_run_wall_s_estimate": steps * spec.n_particles / pps,
-           "note": "2-core machine shared with other engineers' jobs (load ~5) during the probe"}
+           "note": "2-core machine shared with other jobs (load ~5) during the probe"}
     os.makedirs(a.out, exist_ok=True)
     with open(os.path.join(a.out, "ucs_thesis_scale.json"), "w") as f:
         json.dump(res, f, indent=2)

@@ -2,8 +2,11 @@
 
 Two readings, as in a laboratory (compression positive everywhere):
 
-- the **gauge**: the particles whose centres lie in the central half (width and height) of the
-  specimen, like strain gauges glued on its middle. Its strain is the affine least-squares fit
+- the **gauge**: the particles whose centres lie in the middle half of the height, across 90 %
+  of the width (:data:`GAUGE_FRACTION`), like an extensometer on the central length of a
+  laboratory specimen: its mean stress is that of the whole cross-section less a skin of 5 %
+  on each free side (where the packing is softer), so it samples the specimen's grains rather
+  than the few of its centre. Its strain is the affine least-squares fit
   of their displacements (:func:`gauge_strains`), its stress the mean (virial) stress of the
   same particles over the area of their Voronoi cells (:func:`gauge_stress`,
   :func:`cell_area`). Stress and strain of one region obey the material's elastic law at every
@@ -21,12 +24,19 @@ import numpy as np
 __all__ = ["GAUGE_FRACTION", "gauge_indices", "gauge_box", "side_indices", "end_indices",
            "gauge_strains", "layer_strain", "cell_area", "gauge_stress", "crack_crosses"]
 
-#: The strain gauge is the central region spanning this fraction of the width and height.
-GAUGE_FRACTION = 0.5
+#: The strain gauge is the central region spanning these fractions of the width and height.
+GAUGE_FRACTION = (0.9, 0.5)
 
 
-def gauge_indices(x, y, box, *, fraction: float = GAUGE_FRACTION, min_count: int = 6):
-    """Particles whose centres lie in the central ``fraction`` of the box in x and in y.
+def _fractions(fraction):
+    fx, fy = (fraction, fraction) if isinstance(fraction, (int, float)) else fraction
+    return float(fx), float(fy)
+
+
+def gauge_indices(x, y, box, *, fraction=None, margin: float = 0.0, min_count: int = 6):
+    """Particles whose centres lie in the central ``fraction`` (of the width, of the height:
+    a pair or one number for both; default :data:`GAUGE_FRACTION`) of the box, and at least
+    ``margin`` (m) from its side faces (:func:`gauge_box`).
 
     Returns
     -------
@@ -37,21 +47,31 @@ def gauge_indices(x, y, box, *, fraction: float = GAUGE_FRACTION, min_count: int
     ValueError
         Fewer than ``min_count`` particles in the gauge.
     """
-    xmin, xmax, ymin, ymax = box
-    cx, cy = 0.5 * (xmin + xmax), 0.5 * (ymin + ymax)
-    hx, hy = 0.5 * fraction * (xmax - xmin), 0.5 * fraction * (ymax - ymin)
-    idx = np.nonzero((np.abs(x - cx) <= hx) & (np.abs(y - cy) <= hy))[0]
+    gx0, gx1, gy0, gy1 = gauge_box(box, fraction, margin)
+    idx = np.nonzero((x >= gx0) & (x <= gx1) & (y >= gy0) & (y <= gy1))[0]
     if idx.size < min_count:
         raise ValueError(f"strain gauge holds {idx.size} particles, expected >= {min_count}: "
                          f"the specimen is too small for gauge fraction {fraction}")
     return idx
 
 
-def gauge_box(box, fraction: float = GAUGE_FRACTION):
-    """(xmin, xmax, ymin, ymax) of the gauge region of ``box``."""
+def gauge_box(box, fraction=None, margin: float = 0.0):
+    """(xmin, xmax, ymin, ymax) of the gauge region of ``box`` (``fraction`` as in
+    :func:`gauge_indices`; the region keeps ``margin`` from the side faces, so the cells of
+    its particles stay inside the packing).
+
+    Examples
+    --------
+    >>> gauge_box([0.0, 10.0, 0.0, 20.0]).tolist()
+    [0.5, 9.5, 5.0, 15.0]
+    >>> gauge_box([0.0, 10.0, 0.0, 20.0], margin=1.0).tolist()
+    [1.0, 9.0, 5.0, 15.0]
+    """
+    fx, fy = _fractions(GAUGE_FRACTION if fraction is None else fraction)
     xmin, xmax, ymin, ymax = (float(v) for v in box)
     cx, cy = 0.5 * (xmin + xmax), 0.5 * (ymin + ymax)
-    hx, hy = 0.5 * fraction * (xmax - xmin), 0.5 * fraction * (ymax - ymin)
+    hx = max(0.0, min(0.5 * fx * (xmax - xmin), 0.5 * (xmax - xmin) - margin))
+    hy = 0.5 * fy * (ymax - ymin)
     return np.array([cx - hx, cx + hx, cy - hy, cy + hy])
 
 

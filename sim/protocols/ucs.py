@@ -70,13 +70,14 @@ def compression_rig(specimen, x0, y0, box):
         ``summarize(history, cracks, stress_col, first_steady) -> dict``
         (:func:`compression_summary`).
     """
-    gauge = gg.gauge_indices(x0, y0, box)
+    margin = 4.0 * float(np.mean(specimen.r))     # two diameters: cells closed inside the packing
+    gauge = gg.gauge_indices(x0, y0, box, margin=margin)
     mask = np.zeros(x0.size, bool)
     mask[gauge] = True
     area = gg.cell_area(x0, y0, gauge)
     left, right = gg.side_indices(x0, specimen.r, box)
     bottom, top = gg.end_indices(y0, specimen.r, box)
-    gbox = gg.gauge_box(box)
+    gbox = gg.gauge_box(box, margin=margin)
     link = 2.1 * float(specimen.r.max())
 
     def read(sim):

@@ -44,16 +44,18 @@ def test_ucs_lattice_with_unbreakable_bonds_matches_lattice_formula(settings):
     sm = res.summary
     assert sm["stop_reason"] == "max_strain" and sm["cracks"]["total"] == 0
     E_ref, nu_ref = lattice_formula(60e9, 30e9)       # kn = Ē t, ks = kn / κ̄
-    assert sm["E_ok"] and sm["nu_ok"] and sm["elastic"]["source"] == "gauge"
+    assert sm["E_ok"] and sm["nu_ok"] and sm["elastic"]["E_source"] == "gauge"
     assert sm["E_gpa"] * 1e9 == pytest.approx(E_ref, rel=0.01)
     assert sm["nu"] == pytest.approx(nu_ref, rel=0.01)
     assert sm["representative"]["ok"] and "plane stress" in sm["elastic"]["convention"]
     if settings:            # constant speed: every window record is steady
         assert sm["elastic"]["boundary_on_steady_records"]
+        assert sm["elastic"]["nu_source"] == "boundary"
         assert sm["elastic"]["nu_boundary"] == pytest.approx(nu_ref, rel=0.01)
     else:                   # the platens accelerate through the window
         v = res.history["platen_velocity_m_per_s"].to_numpy()
         assert v.max() > 5 * v[5] and not sm["elastic"]["boundary_on_steady_records"]
+        assert sm["elastic"]["nu_source"] == "gauge"
     # the history reached the requested strain and is compression positive
     h = res.history
     assert h["axial_strain"].iloc[-1] >= 5e-4 and h["axial_stress_mpa"].iloc[-1] > 0
