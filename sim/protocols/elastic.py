@@ -49,6 +49,8 @@ __all__ = ["E_AGREEMENT", "ELASTIC_STRESS", "ELASTIC_CRACKS", "STEADY_RECORDS", 
 ELASTIC_STRESS = (0.1, 0.6)
 #: The elastic window ends when the crack count passes this fraction of its value at the peak.
 ELASTIC_CRACKS = 0.05
+_WINDOW = (f"platen stress in {100 * ELASTIC_STRESS[0]:.0f}-{100 * ELASTIC_STRESS[1]:.0f} % of "
+           f"the peak and at most {100 * ELASTIC_CRACKS:.0f} % of the peak's crack count")
 #: Largest relative difference between the gauge and the platen modulus of a valid E.
 E_AGREEMENT = 0.15
 #: A record is steady when the platen speed was the same over this many chunks before it.
@@ -171,6 +173,7 @@ def elastic_constants(history, cracks=None, *, gauge_box=None, link=None,
         ``nu_reason`` and ``elastic`` (every reading, its source, record counts, convention).
     """
     s = history[stress_col].to_numpy(float) * 1e6
+    peak = s[analysis.peak_index(s)]
     sel = elastic_window(history, stress_col)
     steady = steady_records(history, first=first_steady)[sel]
     g = {k: history[c].to_numpy(float)[sel] for k, c in (
@@ -194,8 +197,7 @@ def elastic_constants(history, cracks=None, *, gauge_box=None, link=None,
     else:
         nu, nu_src = nu_g, "gauge"
     if sel.size < MIN_RECORDS:
-        e_why = nu_why = (f"{sel.size} records in the elastic window (10-60 % of the peak, "
-                          f"before {100 * ELASTIC_CRACKS:.0f} % of the peak's cracks), expected "
+        e_why = nu_why = (f"{sel.size} records in the elastic window ({_WINDOW}), expected "
                           f">= {MIN_RECORDS}")
     else:
         e_why = nu_why = ""
@@ -223,9 +225,8 @@ def elastic_constants(history, cracks=None, *, gauge_box=None, link=None,
             "nu_boundary": nu_b, "gauge_crossed_by_crack": bool(crossed),
             "window_records": int(sel.size), "steady_window_records": int(st.size),
             "boundary_on_steady_records": bool(platen_steady),
-            "window_stress_fraction": [float(s[sel[0]] / s.max()), float(s[sel[-1]] / s.max())]
+            "window_stress_fraction": [float(s[sel[0]] / peak), float(s[sel[-1]] / peak)]
             if sel.size else None,
-            "window": (f"pre-peak records with platen stress in 10-60 % of the peak and at most "
-                       f"{100 * ELASTIC_CRACKS:.0f} % of the peak's crack count"),
+            "window": "pre-peak records with " + _WINDOW,
             "convention": CONVENTION},
     }

@@ -51,7 +51,8 @@ def gauge_indices(x, y, box, *, fraction=None, margin: float = 0.0, min_count: i
     idx = np.nonzero((x >= gx0) & (x <= gx1) & (y >= gy0) & (y <= gy1))[0]
     if idx.size < min_count:
         raise ValueError(f"strain gauge holds {idx.size} particles, expected >= {min_count}: "
-                         f"the specimen is too small for gauge fraction {fraction}")
+                         f"the specimen is too small for gauge fraction "
+                         f"{GAUGE_FRACTION if fraction is None else fraction}")
     return idx
 
 
@@ -66,11 +67,14 @@ def gauge_box(box, fraction=None, margin: float = 0.0):
     [0.5, 9.5, 5.0, 15.0]
     >>> gauge_box([0.0, 10.0, 0.0, 20.0], margin=1.0).tolist()
     [1.0, 9.0, 5.0, 15.0]
+    >>> gauge_box([0.0, 10.0, 0.0, 20.0], margin=4.0).tolist()
+    [2.5, 7.5, 5.0, 15.0]
     """
     fx, fy = _fractions(GAUGE_FRACTION if fraction is None else fraction)
     xmin, xmax, ymin, ymax = (float(v) for v in box)
     cx, cy = 0.5 * (xmin + xmax), 0.5 * (ymin + ymax)
-    hx = max(0.0, min(0.5 * fx * (xmax - xmin), 0.5 * (xmax - xmin) - margin))
+    w = xmax - xmin
+    hx = min(0.5 * fx * w, max(0.5 * w - margin, 0.25 * w))   # never below half the width
     hy = 0.5 * fy * (ymax - ymin)
     return np.array([cx - hx, cx + hx, cy - hy, cy + hy])
 

@@ -5,8 +5,9 @@ Measured (compression positive, report units in the names):
 - axial stress = mean platen force / (initial width × t); axial strain from the platen gap;
 - lateral strain from the side layers and volumetric strain = axial + lateral (specimen scale;
   used for CD); axial strain of the end layers (:mod:`sim.protocols.gauges`);
-- the gauge: strains from an affine fit of the central half of the specimen, mean stress of the
-  same particles; E and ν with their validity (:mod:`sim.protocols.elastic`);
+- the gauge: strains from an affine fit of the middle half of the height across the width (less
+  a skin at the free sides), mean stress of the same particles; E and ν with their validity
+  (:mod:`sim.protocols.elastic`);
 - cumulative cracks by kind, kinetic and strain energy.
 
 Stops at ``post_peak`` × peak after the peak (default 0.8, as the thesis) or at ``max_strain``.
