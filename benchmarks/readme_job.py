@@ -61,6 +61,11 @@ def time_file_cost(path):
             + got.get("System time (seconds)", 0.0)}
 
 
+def _particles(out):
+    with open(os.path.join(out, "run.json")) as f:
+        return json.load(f)["particles"]
+
+
 def row(out, seed, cost):
     """One seed's numbers from its ``ucs/summary.json``."""
     with open(os.path.join(out, "ucs", "summary.json")) as f:
@@ -71,7 +76,7 @@ def row(out, seed, cost):
          "nu_reason": s["nu_reason"], "E_gauge_gpa": e["E_gauge_gpa"],
          "E_platen_gpa": e["E_platen_gpa"], "nu_boundary": e["nu_boundary"],
          "nu_gauge": e["nu_gauge"], "window_stress_fraction": e.get("window_stress_fraction"),
-         "n_particles": s.get("config", {}).get("n_particles"),
+         "n_particles": _particles(out),
          "representative_ok": s.get("representative", {}).get("ok")}
     if cost:
         r.update(cost)

@@ -6,9 +6,9 @@ pre-peak records whose platen stress lies between 10 % and 60 % of the peak
 value at the peak. Later records carry the dilatancy of the cracks (each burst of bond breaks
 widens the specimen) and no longer measure the elastic ν: on the 13 × 26 mm README specimens
 ν read at 40-60 % of the peak (the ISRM tangent window) spread from 0.25 to 0.72 over five
-seeds, read in the elastic window from 0.19 to 0.20. The window ends at 30-40 % of the peak on
-gbmgen granite specimens, where laboratory granite starts to crack (crack initiation at 0.3-0.5
-of the peak). Two readings:
+seeds, read in the elastic window from 0.19 to 0.20 (docs/labtests.md). The window ends at
+29-38 % of the peak on those specimens, where laboratory granite starts to crack (crack
+initiation at 0.3-0.5 of the peak). Two readings:
 
 - **gauge** (:mod:`sim.protocols.gauges`): the mean stress (σxx, σyy) and the affine strain of
   the central band of particles, fitted to the 2D elastic law (:func:`plane_stress_fit`).
