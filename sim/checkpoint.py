@@ -7,7 +7,7 @@ import os
 
 import numpy as np
 
-from ._io import save_npz_atomic
+from ._io import load_npz, save_npz_atomic
 from .cracks import CrackLog
 from .errors import InputError
 from .specimen import Specimen
@@ -46,13 +46,7 @@ def load_simulation(cls, path):
         Missing or unreadable file, or not a checkpoint of this format.
     """
     path = os.fspath(path)
-    try:
-        with np.load(path, allow_pickle=False) as z:
-            data = {k: z[k] for k in z.files}
-    except FileNotFoundError:
-        raise InputError(f"{path}: file not found") from None
-    except Exception as exc:
-        raise InputError(f"{path}: not a readable checkpoint ({exc})") from None
+    data = load_npz(path, "checkpoint")
     try:
         meta = json.loads(str(data["sim_meta"][()]))
     except (KeyError, json.JSONDecodeError):
