@@ -12,7 +12,7 @@ relative error is recorded.
         [--threads 1 2] [--budget 1e7] [--repeat 3] [--out benchmarks/dem_throughput_results]
 
 Target (issue #5): >= 25 M particle-steps/s at 20k on 2 threads, flat cost per particle-step
-from 5k to 200k. The 2-core machine is shared by several engineers: wall times are indicative
+from 5k to 200k. The 2-core machine was shared with other jobs: wall times are indicative
 and the load average is recorded with every run.
 """
 from __future__ import annotations
@@ -127,7 +127,7 @@ def main(argv=None):
     a = ap.parse_args(argv)
     import numba
 
-    from sim.verification import verification_cases
+    from sim.verify import verification_cases
     rows = []
     for n in a.sizes:
         for t in a.threads:
@@ -146,7 +146,7 @@ def main(argv=None):
         "peak_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
         "rows": rows, "accuracy": checks,
         "max_rel_error": max((c["rel_error"] for c in checks), default=None),
-        "note": "shared 2-core machine: other engineers' jobs load the CPU (see load_avg_1min)",
+        "note": "shared 2-core machine: other jobs load the CPU (see load_avg_1min)",
     }
     os.makedirs(a.out, exist_ok=True)
     with open(os.path.join(a.out, "dem_throughput.json"), "w") as f:

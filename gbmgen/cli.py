@@ -1,6 +1,8 @@
 """``gbmgen build | run | info | plot | defect | export``: command-line interface (no maths here).
 
-Exit codes: 0 ok, 2 bad input (one line on stderr naming the file or field).
+Exit codes (README "Exit codes"): 0 ok; 2 bad input, ours or semkit's or sim's (one line on
+stderr naming the file or field); 3 numerical failure of the laboratory test (one line naming
+cause, step and hint); 130 interrupted.
 """
 from __future__ import annotations
 
@@ -12,10 +14,29 @@ import time
 
 import numpy as np
 
+from semkit.errors import InputError as SemkitInputError
 from sim.errors import InputError as SimInputError
+from sim.errors import InstabilityError
 
 from . import __version__, config
 from .errors import InputError
+
+#: Errors of the chain reported as bad input (exit 2): ours, semkit's, sim's (its protocols
+#: name a bad option in a ValueError) and a missing file.
+BAD_INPUT = (InputError, SimInputError, SemkitInputError, ValueError, FileNotFoundError)
+#: Text of the exit codes for the --help of every command.
+EXIT_CODES = ("Exit codes: 0 ok; 2 bad input (one line naming the file or field); 3 numerical "
+              "failure (one line naming cause, step and hint); 130 interrupted.")
+
+
+def _seed(text):
+    """``--seed``: a whole number >= 0 or 'random'."""
+    from .run import resolve_seed
+    try:
+        resolve_seed(None if text is None else text)
+    except InputError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+    return text
 
 
 def _read_table(name):
@@ -64,13 +85,17 @@ def _add_model_options(b):
                    help=f"default {config.BOND_GAP_PER_RADIUS} x mean particle radius")
     b.add_argument("--params", default=config.DEFAULT_PARAMS,
                    help="thesis-ch4 | thesis-ch5 | FILE.yaml/json [%(default)s]")
-    b.add_argument("--seed", type=int, default=None,
-                   help="random seed (default: drawn and recorded in meta)")
+    b.add_argument("--seed", type=_seed, default=None,
+                   help=f"random seed: a whole number, or 'random' for a fresh draw (default "
+                        f"{config.DEFAULT_SEED}: the same command builds the same specimen); "
+                        "recorded in the specimen's meta")
 
 
 def _parser():
-    p = argparse.ArgumentParser(prog="gbmgen", description="Grain-based model generator: "
-                                "grain-size table -> bonded grain-based specimen.npz")
+    from sim.protocols.cli import OneLineParser
+    p = OneLineParser(prog="gbmgen", description="Grain-based model generator: "
+                                "grain-size table -> bonded grain-based specimen.npz",
+                                epilog=EXIT_CODES)
     p.add_argument("--version", action="version", version=f"gbmgen {__version__}")
     sub = p.add_subparsers(dest="command", required=True)
 
@@ -90,7 +115,9 @@ def _parser():
     b.add_argument("--json", action="store_true", help="print the summary as JSON")
     b.add_argument("--no-progress", action="store_true", help="print no stage lines")
 
-    r = sub.add_parser("run", help="SEM images -> semkit grains.csv -> specimen.npz (end to end)")
+    r = sub.add_parser("run", help="SEM images -> semkit grains.csv -> specimen.npz (end to end)",
+                       description="SEM images -> semkit -> grains.csv -> specimen.npz -> "
+                       "laboratory test (docs/gbmgen.md). " + EXIT_CODES)
     r.add_argument("images", nargs="?", default="sample_images",
                    help="folder of SEM images [%(default)s]")
     r.add_argument("--out", required=True, help="output folder")
@@ -101,8 +128,9 @@ def _parser():
     r.add_argument("--no-cracks", dest="cracks", action="store_false",
                    help="skip semkit's crack pipeline (grains only)")
     r.add_argument("--jobs", type=int, help="semkit worker processes")
-    r.add_argument("--test", choices=("ucs", "tension", "brazilian", "biaxial", "none"),
-                   default="ucs", help="laboratory test run on the specimen (gbmsim) [%(default)s]")
+    from .run import test_names
+    r.add_argument("--test", choices=test_names(), default="ucs",
+                   help="laboratory test run on the specimen (gbmsim) [%(default)s]")
     r.add_argument("--post-peak", type=float, default=0.8,
                    help="stop the test when the stress falls below this fraction of the peak "
                         "[%(default)s]")
@@ -240,7 +268,7 @@ def _build(a):
         shape=a.shape, slenderness=a.slenderness, grain_area_mm2=a.grain_area_mm2,
         ranges_mm=a.ranges_mm, particle_radius_mm=a.particle_radius_mm, radius_ratio=a.radius_ratio,
         porosity=a.porosity, seat_faces=a.seat_faces, bond_gap_mm=a.bond_gap_mm,
-        params=a.params, seed=a.seed)
+        params=a.params, seed=_resolved_seed(a.seed))
     t1 = time.perf_counter()
     spec.save(a.out)
     timing["save"] = time.perf_counter() - t1
@@ -266,17 +294,25 @@ def _build(a):
     return 0
 
 
+def _resolved_seed(seed):
+    from .run import resolve_seed
+    return resolve_seed(seed)[0]
+
+
 def _run(a):
+    from sim.protocols.cli import specimen_warnings
+
     from .run import run
-    summary = run(a.images, a.out, minerals=a.minerals, classes=a.classes,
-                  pixel_size_um=a.pixel_size_um, cracks=a.cracks, jobs=a.jobs,
-                  progress=not a.no_progress, seed=a.seed, scenario=a.scenario, scale=a.scale,
-                  model_scale=a.model_scale, ranges_mm=a.ranges_mm,
-                  width_mm=a.width_mm, height_mm=a.height_mm,
-                  tessellation=a.tessellation, fit_areas=a.fit_areas,
-                  particle_radius_mm=a.particle_radius_mm, radius_ratio=a.radius_ratio,
-                  porosity=a.porosity, seat_faces=a.seat_faces, bond_gap_mm=a.bond_gap_mm,
-                  params=a.params, test=a.test, test_options={"post_peak": a.post_peak})
+    with specimen_warnings():
+        summary = run(a.images, a.out, minerals=a.minerals, classes=a.classes,
+                      pixel_size_um=a.pixel_size_um, cracks=a.cracks, jobs=a.jobs,
+                      progress=not a.no_progress, seed=a.seed, scenario=a.scenario,
+                      scale=a.scale, model_scale=a.model_scale, ranges_mm=a.ranges_mm,
+                      width_mm=a.width_mm, height_mm=a.height_mm,
+                      tessellation=a.tessellation, fit_areas=a.fit_areas,
+                      particle_radius_mm=a.particle_radius_mm, radius_ratio=a.radius_ratio,
+                      porosity=a.porosity, seat_faces=a.seat_faces, bond_gap_mm=a.bond_gap_mm,
+                      params=a.params, test=a.test, test_options={"post_peak": a.post_peak})
     print(json.dumps(summary, indent=1, default=str))
     ts, ps = summary.get("test_summary") or {}, summary.get("P_sem") or {}
     if ts.get("P_sim") and ps.get("P_pooled") is not None:
@@ -323,6 +359,7 @@ def main(argv=None) -> int:
     """Entry point of the ``gbmgen`` console script."""
     argv = sys.argv[1:] if argv is None else list(argv)
     parser = _parser()
+    created = _new_folder(argv)
     try:
         if argv and argv[0] == "build":
             _apply_config(parser, argv[1:])
@@ -361,10 +398,37 @@ def main(argv=None) -> int:
                 for p in export_vtk(spec, a.vtk):
                     print(f"wrote {p}")
             return 0
-    except (InputError, SimInputError) as exc:
-        print(f"gbmgen: error: {exc}", file=sys.stderr)
+    except BAD_INPUT as exc:
+        print(f"gbmgen: error: {_one_line(exc)}", file=sys.stderr)
+        _remove_new(created)
         return 2
+    except InstabilityError as exc:
+        print(f"gbmgen: numerical failure: {_one_line(exc)}", file=sys.stderr)
+        return 3
+    except KeyboardInterrupt:
+        print("gbmgen: interrupted", file=sys.stderr)
+        return 130
     return 0
+
+
+def _one_line(exc) -> str:
+    return " ".join(str(exc).split())
+
+
+def _new_folder(argv):
+    """The --out folder of ``gbmgen run`` when it does not exist yet (removed again on bad
+    input, so that nothing half-written is left), else None."""
+    if not argv or argv[0] != "run" or "--out" not in argv:
+        return None
+    k = argv.index("--out")
+    path = argv[k + 1] if k + 1 < len(argv) else None
+    return path if path and not os.path.exists(path) else None
+
+
+def _remove_new(path):
+    if path and os.path.isdir(path):
+        import shutil
+        shutil.rmtree(path, ignore_errors=True)
 
 
 if __name__ == "__main__":  # pragma: no cover

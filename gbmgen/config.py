@@ -25,6 +25,9 @@ S3_HALF_WIDTH = 0.5
 S4_HALF_WIDTH = 0.25
 #: Thesis: model scale = 10 x SEM scale (REFERENCE.md Ch. 4).
 MODEL_SCALE = 10.0
+#: Random seed of ``gbmgen build`` and ``gbmgen run`` when none is given (``--seed random``
+#: draws one): two runs of the same command build the same specimen.
+DEFAULT_SEED = 1
 
 # ---------------------------------------------------------------- grain seeds
 #: Solid fraction of the seed-disk packing; seed radius = d/2 * sqrt(SEED_PACKING_FRACTION),

@@ -27,12 +27,48 @@ __all__ = ["run"]
 #: Thesis minerals, brightest first in BSE images.
 DEFAULT_MINERALS = "pyroxene,plagioclase,biotite"
 
-#: Laboratory tests ``run`` can finish with (``none``: stop at the specimen).
-TESTS = ("ucs", "tension", "brazilian", "biaxial", "none")
-
 #: Summary keys of the test copied into run.json.
-_TEST_KEYS = ("E_gpa", "nu", "ucs_mpa", "ci_mpa", "cd_mpa", "tensile_mpa", "cracks", "P_sim",
-              "steps", "wall_s", "particle_steps_per_s", "stop_reason")
+_TEST_KEYS = ("E_gpa", "nu", "E_ok", "E_reason", "nu_ok", "nu_reason", "elastic", "ucs_mpa",
+              "ci_mpa", "cd_mpa", "tensile_mpa", "cracks", "P_sim", "steps", "wall_s",
+              "particle_steps_per_s", "stop_reason", "representative")
+
+
+def test_names() -> tuple:
+    """Laboratory tests ``run`` can finish with: those of
+    :data:`sim.protocols.registry.TESTS`, and ``none`` (stop at the specimen)."""
+    from sim.protocols.registry import test_names as names
+    return (*names(), "none")
+
+
+def resolve_seed(seed):
+    """``(seed, source)``: None -> :data:`gbmgen.config.DEFAULT_SEED` ("default"), an integer
+    as given ("given"), ``"random"`` -> a fresh draw ("random").
+
+    Raises
+    ------
+    InputError
+        Neither an integer >= 0 nor "random".
+
+    Examples
+    --------
+    >>> resolve_seed(None)
+    (1, 'default')
+    >>> resolve_seed("7")
+    (7, 'given')
+    """
+    from . import config
+    if seed is None:
+        return config.DEFAULT_SEED, "default"
+    if isinstance(seed, str) and seed.strip().lower() == "random":
+        import numpy as np
+        return int(np.random.SeedSequence().entropy % 2**32), "random"
+    try:
+        value = int(seed)
+    except (TypeError, ValueError):
+        value = -1
+    if value < 0 or (isinstance(seed, float) and seed != value):
+        raise InputError(f"seed = {seed!r}: expected a whole number >= 0 or 'random'")
+    return value, "given"
 
 
 def run_test(spec, test, out, *, progress=True, **options):
@@ -41,29 +77,23 @@ def run_test(spec, test, out, *, progress=True, **options):
     Parameters
     ----------
     spec : sim.Specimen
-    test : {"ucs", "tension", "brazilian", "biaxial"}
+    test : str
+        A name of :data:`sim.protocols.registry.TESTS`.
     out : path
         Results folder of the test.
     progress : bool
     **options
-        Keywords of the protocol function (e.g. ``post_peak``, ``strain_rate``).
+        Options of :func:`sim.protocols.registry.run_test` (e.g. ``post_peak``).
 
     Returns
     -------
     summary : dict
         The protocol's ``summary.json`` content.
     """
-    if test == "ucs":
-        from sim.protocols.ucs import run_ucs as fn
-    elif test == "tension":
-        from sim.protocols.tension import run_tension as fn
-    elif test == "brazilian":
-        from sim.protocols.brazilian import run_brazilian as fn
-    elif test == "biaxial":
-        from sim.protocols.biaxial import run_biaxial as fn
-    else:
-        raise InputError(f"test = {test!r}: expected one of {', '.join(TESTS)}")
-    return fn(spec, out=str(out), progress=progress, **options).summary
+    from sim.protocols.registry import run_test as run_protocol
+    if test not in test_names()[:-1]:
+        raise InputError(f"test = {test!r}: expected one of {', '.join(test_names())}")
+    return run_protocol(test, spec, out=str(out), progress=progress, **options).summary
 
 
 def sem_damage(sem_dir):
@@ -113,7 +143,10 @@ def run(images_dir="sample_images", out="gbmgen_run", *, minerals=DEFAULT_MINERA
         semkit worker processes.
     progress : bool
         tqdm bars in semkit.
-    seed : int, optional
+    seed : int or "random", optional
+        Seed of semkit's grain analysis and of the specimen; default
+        :data:`gbmgen.config.DEFAULT_SEED` (two runs give identical numbers); ``"random"``
+        draws one. Written to run.json with its source.
     test : {"ucs", "tension", "brazilian", "biaxial", "none"}
         Laboratory test run on the built specimen (:func:`run_test`); ``"none"`` stops at the
         specimen.
@@ -131,7 +164,11 @@ def run(images_dir="sample_images", out="gbmgen_run", *, minerals=DEFAULT_MINERA
     Raises
     ------
     InputError
-        The folder is missing or empty, or semkit wrote no usable grain-size table.
+        The folder is missing or empty, a bad seed or test, or semkit wrote no usable
+        grain-size table (semkit's and sim's own input errors pass through; the command line
+        reports all of them as bad input).
+    sim.errors.InstabilityError
+        The test's engine became unstable before the peak.
     """
     from .build import build_specimen
     from .plot import plot_specimen
@@ -141,8 +178,9 @@ def run(images_dir="sample_images", out="gbmgen_run", *, minerals=DEFAULT_MINERA
     out = pathlib.Path(out)
     if not images_dir.is_dir():
         raise InputError(f"{images_dir}: not a folder of SEM images")
-    if test not in TESTS:
-        raise InputError(f"test = {test!r}: expected one of {', '.join(TESTS)}")
+    if test not in test_names():
+        raise InputError(f"test = {test!r}: expected one of {', '.join(test_names())}")
+    seed, seed_source = resolve_seed(seed)
     sem = out / "semkit"
     sem.mkdir(parents=True, exist_ok=True)
     timing = {}
@@ -181,7 +219,8 @@ def run(images_dir="sample_images", out="gbmgen_run", *, minerals=DEFAULT_MINERA
         "particles": spec.n_particles, "grains": spec.n_grains,
         "parallel_bonds": int((spec.bond_kind == 0).sum()),
         "smooth_joints": int((spec.bond_kind == 1).sum()),
-        "seed": spec.meta["seed"], "scenario": spec.meta["scenario"],
+        "seed": spec.meta["seed"], "seed_source": seed_source,
+        "scenario": spec.meta["scenario"],
         "MHI_target": spec.meta["MHI_target"], "MHI_realised": spec.meta["MHI_realised"],
         "test": test, "test_summary": test_summary,
         "P_sem": sem_damage(sem) if cracks else {},

@@ -1,10 +1,13 @@
-"""Atomic file writes for :mod:`sim` (temporary file in the target folder, then rename)."""
+"""Atomic file writes for :mod:`sim` (temporary file in the target folder, then rename), and
+the checked read of an ``.npz`` file."""
 from __future__ import annotations
 
 import os
 import tempfile
 
 import numpy as np
+
+from .errors import InputError
 
 
 def write_atomic(path, write, *, fsync: bool = False) -> str:
@@ -70,3 +73,21 @@ def save_npz_atomic(path, arrays: dict, *, compressed: bool = False, fsync: bool
             (np.savez_compressed if compressed else np.savez)(f, **arrays)
 
     return write_atomic(path, write, fsync=fsync)
+
+
+def load_npz(path, what: str) -> dict:
+    """All arrays of the ``.npz`` file ``path`` (no pickle), as a dict.
+
+    Raises
+    ------
+    InputError
+        ``path`` is missing or not a readable ``what`` (one line naming the file).
+    """
+    path = os.fspath(path)
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            return {k: z[k] for k in z.files}
+    except FileNotFoundError:
+        raise InputError(f"{path}: file not found") from None
+    except Exception as exc:  # zipfile.BadZipFile, ValueError (pickled arrays), ...
+        raise InputError(f"{path}: not a readable {what} ({exc})") from None

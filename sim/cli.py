@@ -1,7 +1,7 @@
 """``gbmsim``: command line of the DEM engine (info, bench, verify) and of the lab-test protocols.
 
 No maths here: each subcommand calls the API (STYLE.md §4). Exit codes: 0 ok, 1 a check
-failed, 2 bad input.
+failed, 2 bad input, 3 numerical failure, 130 interrupted (README "Exit codes").
 """
 from __future__ import annotations
 
@@ -70,7 +70,7 @@ def _bench(args) -> int:
 
 
 def _verify(args) -> int:
-    from .verification import verification_cases
+    from .verify import verification_cases
     rows = verification_cases()
     if args.json:
         print(json.dumps(rows, indent=2))
@@ -83,7 +83,9 @@ def _verify(args) -> int:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="gbmsim", description="2D bonded-particle DEM (PFC2D style)")
+    from .protocols.cli import EXIT_CODES, OneLineParser
+    p = OneLineParser(prog="gbmsim", description="2D bonded-particle DEM (PFC2D style)",
+                      epilog=EXIT_CODES)
     p.add_argument("--version", action="version", version=f"gbmsim {__version__}")
     sub = p.add_subparsers(dest="command", required=True)
     q = sub.add_parser("info", help="summarise a specimen.npz and its time step")
@@ -125,8 +127,8 @@ def main(argv=None) -> int:
         print(f"gbmsim: {exc}", file=sys.stderr)
         return 2
     except InstabilityError as exc:
-        print(f"gbmsim: {exc}", file=sys.stderr)
-        return 1
+        print(f"gbmsim: numerical failure: {exc}", file=sys.stderr)
+        return 3
     except KeyboardInterrupt:
         print("gbmsim: interrupted", file=sys.stderr)
         return 130

@@ -1,5 +1,5 @@
-"""Observables: energies, the unbalanced-force ratio, and the analytic reference values used by
-``gbmsim verify`` (REFERENCE.md §6; the checks themselves are in :mod:`sim.verification`)."""
+"""Observables: energies, the unbalanced-force ratio, pair forces and the virial stress, and the
+analytic reference values of ``gbmsim verify`` (:mod:`sim.verify`, REFERENCE.md §6)."""
 from __future__ import annotations
 
 import math

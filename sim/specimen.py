@@ -11,7 +11,7 @@ from dataclasses import dataclass, field, fields
 
 import numpy as np
 
-from ._io import save_npz_atomic
+from ._io import load_npz, save_npz_atomic
 from .errors import InputError
 
 SCHEMA_VERSION = 1
@@ -239,14 +239,7 @@ class Specimen:
             If the file is missing, unreadable, or a field is absent or malformed.
         """
         path = os.fspath(path)
-        try:
-            with np.load(path, allow_pickle=False) as z:
-                data = {k: z[k] for k in z.files}
-        except FileNotFoundError:
-            raise InputError(f"{path}: file not found") from None
-        except Exception as exc:  # zipfile.BadZipFile, ValueError (pickled arrays), ...
-            raise InputError(f"{path}: not a readable specimen.npz ({exc})") from None
-        return cls.from_arrays(data, source=path)
+        return cls.from_arrays(load_npz(path, "specimen.npz"), source=path)
 
     @classmethod
     def from_arrays(cls, data: dict, source: str = "specimen") -> "Specimen":

@@ -16,18 +16,21 @@ import json
 import math
 import os
 import time
+from dataclasses import dataclass
 
 import numpy as np
 
-from .. import analysis
 from ..config import THICKNESS
-from . import loading as ld
 from . import resume as rs
+from .loop import second_ctrl_c_waits
+from .options import TestOptions
 from .outputs import write_results
-from .report import TestResult, base_summary, crack_summary
-from .ucs import compression_summary
+from .report import base_summary
+from .rig import add_platens, crack_frame, crack_tally, make_simulation, platen_force, platen_gap
+from .skeleton import Protocol, Rig, run_loading
+from .ucs import compression_rig
 
-__all__ = ["run_biaxial", "DEFAULT_CONFINEMENT"]
+__all__ = ["Biaxial", "run_biaxial", "DEFAULT_CONFINEMENT"]
 
 #: Default confining stress, Pa (the thesis's triaxial tests: σ2 = σ3 = 20 MPa).
 DEFAULT_CONFINEMENT = 20e6
@@ -44,7 +47,7 @@ def _wall_stress(sim, k, axis, length):
 def _sizes(sim, walls):
     """Height (platen gap) and width (side-wall gap) of the specimen, m."""
     bot, top, left, right = walls
-    return ld.platen_gap(sim, bot, top, 1), ld.platen_gap(sim, left, right, 0)
+    return platen_gap(sim, bot, top, 1), platen_gap(sim, left, right, 0)
 
 
 def _consolidate(sim, walls, confinement, *, tol, max_steps, check=CONSOLIDATION_CHECK,
@@ -126,7 +129,7 @@ def _stage1(specimen, sim, walls, confinement, options, *, out, tol, max_steps,
         sim.save(os.path.join(out, "checkpoint.npz"))
         summary = _stage1_summary(specimen, sim, status, n,
                                   seconds + time.perf_counter() - t0, options, dt0)
-        write_results(out, summary=summary, cracks=ld.crack_frame(sim))
+        write_results(out, summary=summary, cracks=crack_frame(sim))
 
     bar = None
     if progress:
@@ -148,7 +151,7 @@ def _stage1(specimen, sim, walls, confinement, options, *, out, tol, max_steps,
                                  steps=steps, on_check=on_check)
     except KeyboardInterrupt:
         if out is not None:
-            with ld.second_ctrl_c_waits():
+            with second_ctrl_c_waits():
                 write("interrupted", int(sim.step) - start)
         raise
     finally:
@@ -182,183 +185,161 @@ def _resume_stage1(out, specimen, options):
     return sim, steps, float(summary["consolidation_s"]), float(summary["initial_dt_s"])
 
 
-def run_biaxial(specimen, *, confinement: float = DEFAULT_CONFINEMENT,
-                strain_rate: float | None = None,
-                platen_velocity: float = ld.DEFAULT_PLATEN_VELOCITY,
-                post_peak: float | None = ld.DEFAULT_POST_PEAK, max_strain: float | None = None,
-                damping: float = 0.7, timestep_factor: float | None = ld.DEFAULT_TIMESTEP_FACTOR,
-                record_strain: float = ld.RECORD_STRAIN, ramp_records: int = 5,
-                consolidation_tol: float = 0.01, consolidation_steps: int = 200_000,
-                limit_strain: float = 0.08, out=None, progress: bool = True,
-                figures: bool = True,
-                checkpoint_every: int = 0, resume: bool = False,
-                sim_options=None) -> TestResult:
+@dataclass
+class Biaxial(Protocol):
     """Biaxial compression at confining stress ``confinement`` (Pa).
 
-    Parameters
+    Attributes
     ----------
-    specimen : sim.Specimen
     confinement : float, Pa
         σ3 held by the side-wall servos (default 20 MPa).
     consolidation_tol : float
         Relative tolerance of every wall stress at the end of stage 1.
     consolidation_steps : int
-        Step limit of stage 1 (a warning goes into the summary if it is reached).
-    strain_rate, platen_velocity, post_peak, max_strain, damping, timestep_factor,
-    record_strain, ramp_records, limit_strain, out, progress, figures, checkpoint_every,
-    sim_options :
-        As in :func:`sim.protocols.ucs.run_ucs`. With ``out``, the state at the end of stage 1
-        is also saved as ``out/consolidated.npz`` (the reference of the strains, for
-        ``resume``).
-    resume : bool
-        Continue a test interrupted in stage 2 from ``out`` (as
-        :func:`sim.protocols.ucs.run_ucs`): the engine state (walls, servos and platen
-        velocities included) from ``checkpoint.npz``, the records from ``history.csv``, the
-        record interval and the stage-1 outcome from ``summary.json``, the reference positions
-        and lengths from ``consolidated.npz``; stage 1 is not run again. Give the same
-        specimen and options (confinement and strain rate are checked). A test stopped in
-        stage 1 (``summary.json`` with ``"stage": "consolidation"``, written on Ctrl-C and
-        every ``checkpoint_every`` servo intervals of :data:`CONSOLIDATION_CHECK` steps)
-        continues stage 1 from ``checkpoint.npz`` and then runs stage 2 (confinement,
-        ``consolidation_tol`` and ``consolidation_steps`` are checked).
+        Step limit of stage 1 (``consolidation_converged`` false in the summary if reached).
+    """
+
+    confinement: float = DEFAULT_CONFINEMENT
+    consolidation_tol: float = 0.01
+    consolidation_steps: int = 200_000
+
+    name = "biaxial"
+    label = "biaxial"
+    help = "biaxial compression with servo-held confinement"
+    record_strain = 2e-5
+    limit_strain = 0.08
+    peak = "ucs_mpa"
+    resume_keys = ("confinement_mpa",)
+
+    def _stage1_options(self, opts):
+        return dict(confinement_mpa=self.confinement / 1e6,
+                    consolidation_tol=self.consolidation_tol,
+                    consolidation_max_steps=int(self.consolidation_steps),
+                    damping=opts.damping, timestep_factor=opts.timestep_factor)
+
+    def start(self, loaded, opts: TestOptions):
+        """Stage 1 (consolidation), or what an interrupted run left: a run stopped in stage 1
+        continues it, a run stopped in stage 2 is read back with its consolidated state."""
+        if not (self.confinement > 0 and math.isfinite(self.confinement)):
+            raise ValueError(f"'confinement' = {self.confinement!r}, expected a positive "
+                             "stress (Pa)")
+        out = opts.out
+        stage1 = self._stage1_options(opts)
+        part1 = _resume_stage1(out, loaded, stage1) if opts.resume else None
+        if opts.resume and part1 is None:           # stopped in stage 2
+            prev = rs.load_partial(out, "biaxial", loaded.n_particles, also=(CONSOLIDATED,))
+            start = rs.load_state(prev.paths[CONSOLIDATED], loaded.n_particles)
+            if int(start.step) != int(prev.rows[0]["step"]):
+                raise ValueError(f"cannot resume: {prev.paths[CONSOLIDATED]} is at step "
+                                 f"{start.step}, expected {int(prev.rows[0]['step'])} (the "
+                                 f"first record of {prev.paths['history.csv']}): not the "
+                                 "same run")
+            s1 = prev.summary
+            seconds = float(s1["consolidation_s"])
+            prev.wall_s -= seconds                  # the summary's wall time includes stage 1
+            return prev.sim, prev, dict(
+                walls=(0, 1, 2, 3), start=start, steps1=int(s1["consolidation_steps"]),
+                converged=bool(s1["consolidation_converged"]), seconds=seconds, dt=None)
+        if part1 is None:
+            sim = make_simulation(loaded, **opts.engine())
+            walls = (*add_platens(sim, loaded.box, axis=1, fric=0.0),
+                     *add_platens(sim, loaded.box, axis=0, fric=0.0))
+            dt, done, seconds = float(sim.dt), 0, 0.0
+        else:                                       # stopped in stage 1: continue it
+            sim, done, seconds, dt = part1
+            walls = (0, 1, 2, 3)
+        steps1, ok, seconds = _stage1(
+            loaded, sim, walls, self.confinement, stage1, out=out, tol=self.consolidation_tol,
+            max_steps=self.consolidation_steps, checkpoint_every=opts.checkpoint_every, dt0=dt,
+            steps=done, seconds=seconds, progress=opts.progress)
+        sim.clear_servo(walls[0])
+        sim.clear_servo(walls[1])
+        if out is not None:
+            sim.save(os.path.join(out, CONSOLIDATED))
+        return sim, None, dict(walls=walls, start=sim, steps1=steps1, converged=ok,
+                               seconds=seconds, dt=dt)
+
+    def rig(self, loaded, sim, opts: TestOptions, resumed: bool, ctx) -> Rig:
+        bot, top, left, right = walls = ctx["walls"]
+        start = ctx["start"]
+        confinement = self.confinement
+        h0, w0 = _sizes(start, walls)             # strains from the consolidated state
+        x0, y0 = np.array(start.x, copy=True), np.array(start.y, copy=True)
+        box = np.array([start.wall_position(left)[0], start.wall_position(right)[0],
+                        start.wall_position(bot)[1], start.wall_position(top)[1]])
+        read, summarize = compression_rig(loaded, x0, y0, box)
+        c0 = crack_tally(start)["total"]
+
+        def drive(v):
+            sim.set_wall_velocity(bot, 0.0, v)
+            sim.set_wall_velocity(top, 0.0, -v)
+            h, _ = _sizes(sim, walls)
+            sim.set_servo(left, confinement, h)
+            sim.set_servo(right, confinement, h)
+
+        def record():
+            h, w = _sizes(sim, walls)
+            ea, el = (h0 - h) / h0, (w0 - w) / w0
+            s1 = platen_force(sim, bot, top, 1) / (w * THICKNESS)
+            s3 = platen_force(sim, left, right, 0) / (h * THICKNESS)
+            g = read(sim)
+            g.pop("side_lateral_strain")          # the servo walls hold the sides
+            return {"axial_strain": ea, "lateral_strain": el, "volumetric_strain": ea + el,
+                    "axial_stress_mpa": s1 / 1e6, "confining_stress_mpa": s3 / 1e6,
+                    "deviatoric_stress_mpa": (s1 - s3) / 1e6, **g,
+                    "cracks_loading": crack_tally(sim)["total"] - c0}
+
+        def summary_numbers(hist, cracks):
+            dev = summarize(hist, cracks, "deviatoric_stress_mpa", opts.ramp_records)
+            dev["deviatoric_peak_mpa"] = dev["ucs_mpa"]
+            dev["ucs_mpa"] = float(np.max(hist["axial_stress_mpa"].to_numpy(float)))
+            dev["stress_measure"] = ("ucs_mpa: peak axial stress sigma1; E, nu, ci_mpa, "
+                                     "cd_mpa on the deviatoric stress sigma1 - sigma3")
+            return dev
+
+        def finish(summary):
+            summary.update({"confining_mpa": confinement / 1e6,
+                            "consolidation_steps": ctx["steps1"],
+                            "consolidation_converged": ctx["converged"],
+                            "consolidation_s": ctx["seconds"]})
+            summary["steps"] += ctx["steps1"]
+            summary["wall_s"] += ctx["seconds"]
+            if summary["wall_s"] > 0:
+                summary["particle_steps_per_s"] = (loaded.n_particles * summary["steps"]
+                                                   / summary["wall_s"])
+
+        stage1 = self._stage1_options(opts)
+        return Rig(length=h0, drive=drive, record=record, summarize=summary_numbers,
+                   min_peak_pa=max(1e6, confinement), finish=finish, dt=ctx["dt"],
+                   options={k: stage1[k] for k in ("confinement_mpa", "consolidation_tol",
+                                                   "consolidation_max_steps")})
+
+
+def run_biaxial(specimen, *, confinement: float = DEFAULT_CONFINEMENT,
+                consolidation_tol: float = 0.01, consolidation_steps: int = 200_000,
+                **options):
+    """Biaxial compression of ``specimen`` at confining stress ``confinement`` (Pa).
+
+    Parameters
+    ----------
+    specimen : sim.Specimen
+    confinement, consolidation_tol, consolidation_steps :
+        See :class:`Biaxial`.
+    **options
+        The shared options (:class:`sim.protocols.options.TestOptions`). With ``out``, the
+        state at the end of stage 1 is also saved as ``out/consolidated.npz`` (the reference of
+        the strains). ``resume`` continues a test stopped in stage 2 from ``checkpoint.npz``,
+        ``history.csv``, ``summary.json`` and ``consolidated.npz`` (stage 1 is not run again),
+        and a test stopped in stage 1 (``summary.json`` with ``"stage": "consolidation"``,
+        written on Ctrl-C and every ``checkpoint_every`` servo intervals of
+        :data:`CONSOLIDATION_CHECK` steps) from its ``checkpoint.npz`` through stage 2.
 
     Returns
     -------
     result : TestResult
-
-    Raises
-    ------
-    ValueError, FileNotFoundError
-        Bad confinement, rate or stop rule; with ``resume``, see
-        :func:`sim.protocols.resume.load_partial`.
+        ``ucs_mpa`` = peak σ1, ``deviatoric_peak_mpa``, E and ν on the deviatoric stress,
+        ``consolidation_*``.
     """
-    if not (confinement > 0 and math.isfinite(confinement)):
-        raise ValueError(f"'confinement' = {confinement!r}, expected a positive stress (Pa)")
-    stop = ld.StopRule(post_peak=post_peak, max_strain=max_strain,
-                       min_peak_pa=max(1e6, confinement))
-    specimen, _ = ld.relieve_overlaps(specimen.validate("specimen"))
-    opts = dict(damping=damping, **(sim_options or {}))
-    if timestep_factor is not None:
-        opts["timestep_factor"] = timestep_factor
-    box = specimen.box
-    stage1_opts = dict(confinement_mpa=confinement / 1e6, consolidation_tol=consolidation_tol,
-                       consolidation_max_steps=int(consolidation_steps), damping=damping,
-                       timestep_factor=timestep_factor)
-    part1 = _resume_stage1(out, specimen, stage1_opts) if resume else None
-    resume2 = resume and part1 is None          # stopped in stage 2
-    if resume2:
-        prev = rs.load_partial(out, "biaxial", specimen.n_particles, also=(CONSOLIDATED,))
-        start = rs.load_state(prev.paths[CONSOLIDATED], specimen.n_particles)
-        if int(start.step) != int(prev.rows[0]["step"]):
-            raise ValueError(f"cannot resume: {prev.paths[CONSOLIDATED]} is at step "
-                             f"{start.step}, expected {int(prev.rows[0]['step'])} (the first "
-                             f"record of {prev.paths['history.csv']}): not the same run")
-        sim, walls = prev.sim, (0, 1, 2, 3)
-        dt = None                               # the loop's step counts come from prev
-        stage1 = prev.summary
-        steps1 = int(stage1["consolidation_steps"])
-        ok = bool(stage1["consolidation_converged"])
-        consolidation_s = float(stage1["consolidation_s"])
-        prev.wall_s -= consolidation_s          # the summary's wall time includes stage 1
-    else:
-        if part1 is None:
-            sim = ld.make_simulation(specimen, **opts)
-            walls = (*ld.add_platens(sim, box, axis=1, fric=0.0),
-                     *ld.add_platens(sim, box, axis=0, fric=0.0))
-            dt = float(sim.dt)
-            done, seconds = 0, 0.0
-        else:                                   # stopped in stage 1: continue it
-            sim, done, seconds, dt = part1
-            walls = (0, 1, 2, 3)
-        # ---- stage 1: isotropic consolidation by four servos
-        steps1, ok, consolidation_s = _stage1(
-            specimen, sim, walls, confinement, stage1_opts, out=out, tol=consolidation_tol,
-            max_steps=consolidation_steps, checkpoint_every=checkpoint_every, dt0=dt,
-            steps=done, seconds=seconds, progress=progress)
-        sim.clear_servo(walls[0])
-        sim.clear_servo(walls[1])
-        start = sim
-    bot, top, left, right = walls
-
-    def sizes():
-        return _sizes(sim, walls)
-
-    # ---- stage 2: axial loading, side servos kept; strains from the consolidated state
-    h0, w0 = _sizes(start, walls)
-    strain_rate, v = ld.loading_rate(strain_rate, platen_velocity, h0)
-    x0, y0 = np.array(start.x, copy=True), np.array(start.y, copy=True)
-    cur_box = np.array([np.asarray(start.wall_position(left))[0],
-                        np.asarray(start.wall_position(right))[0],
-                        np.asarray(start.wall_position(bot))[1],
-                        np.asarray(start.wall_position(top))[1]])
-    gauge = ld.gauge_indices(x0, y0, cur_box)
-    c_start = ld.crack_tally(start)
-    chunk, max_steps = ld.loop_steps(strain_rate, dt, record_strain=record_strain,
-                                     ramp_records=ramp_records, max_strain=max_strain,
-                                     limit_strain=limit_strain, resumed=prev if resume2 else None)
-    if out is not None and not resume2:
-        sim.save(os.path.join(out, CONSOLIDATED))
-
-    def on_chunk(k):
-        f = min(1.0, (k + 1) / max(1, ramp_records))
-        sim.set_wall_velocity(bot, 0.0, f * v)
-        sim.set_wall_velocity(top, 0.0, -f * v)
-        h, _ = sizes()
-        sim.set_servo(left, confinement, h)
-        sim.set_servo(right, confinement, h)
-
-    def record():
-        h, w = sizes()
-        ea = (h0 - h) / h0
-        el = (w0 - w) / w0
-        s1 = ld.platen_force(sim, bot, top, 1) / (w * THICKNESS)
-        s3 = ld.platen_force(sim, left, right, 0) / (h * THICKNESS)
-        gl, ga = ld.gauge_strains(x0, y0, sim.x, sim.y, gauge)
-        c = ld.crack_tally(sim)
-        ek, es = ld.energies(sim)
-        return {"step": int(sim.step), "time_s": float(sim.time), "axial_strain": ea,
-                "lateral_strain": el, "volumetric_strain": ea + el,
-                "axial_stress_mpa": s1 / 1e6, "confining_stress_mpa": s3 / 1e6,
-                **{f"cracks_{k}": c[k] for k in analysis.CRACK_KINDS},
-                "cracks_total": c["total"], "kinetic_energy_j": ek, "strain_energy_j": es,
-                "deviatoric_stress_mpa": (s1 - s3) / 1e6, "gauge_axial_strain": ga,
-                "gauge_lateral_strain": gl, "cracks_loading": c["total"] - c_start["total"]}
-
-    options = dict(**stage1_opts, strain_rate_per_s=strain_rate,
-                   platen_velocity_m_per_s=v, post_peak=post_peak, max_strain=max_strain,
-                   chunk_steps=chunk, max_steps=max_steps)
-    if resume2:
-        rs.check_options(prev, options, ("confinement_mpa", "strain_rate_per_s"))
-    loop = ld.LoadingLoop(sim=sim, record=record, chunk=chunk, max_steps=max_steps, stop=stop,
-                          on_chunk=on_chunk, progress=progress, desc="biaxial",
-                          checkpoint_every=checkpoint_every,
-                          checkpoint=None if out is None else f"{out}/checkpoint.npz")
-
-    def finish(figures=figures):
-        hist = loop.history()
-        cracks = ld.crack_frame(sim)
-        summary = base_summary("biaxial", specimen, loop, sim, options)
-        summary.update({"confining_mpa": confinement / 1e6, "consolidation_steps": steps1,
-                        "consolidation_converged": ok, "consolidation_s": consolidation_s})
-        summary["steps"] += steps1
-        summary["wall_s"] += consolidation_s
-        n = specimen.n_particles
-        summary["particle_steps_per_s"] = n * summary["steps"] / summary["wall_s"]
-        if len(hist) > 2:
-            dev = compression_summary(hist, stress_col="deviatoric_stress_mpa")
-            s1 = hist["axial_stress_mpa"].to_numpy(float)
-            summary.update(dev)
-            summary["deviatoric_peak_mpa"] = dev["ucs_mpa"]
-            summary["ucs_mpa"] = float(np.max(s1))
-            summary["stress_measure"] = ("ucs_mpa: peak axial stress sigma1; E, nu, ci_mpa, "
-                                         "cd_mpa on the deviatoric stress sigma1 - sigma3")
-        summary.update(crack_summary(cracks))
-        res = TestResult(summary=summary, history=hist, cracks=cracks, sim=sim,
-                         specimen=specimen, stress_column="axial_stress_mpa")
-        if out is not None:
-            res.write(out, figures=figures)
-        return res
-
-    if resume2:
-        rs.restore_loop(loop, prev)
-    return ld.run_and_finish(loop, finish)
+    return run_loading(Biaxial(confinement=confinement, consolidation_tol=consolidation_tol,
+                               consolidation_steps=consolidation_steps), specimen,
+                       TestOptions(**options))

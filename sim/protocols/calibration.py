@@ -12,24 +12,42 @@
 """
 from __future__ import annotations
 
+import hashlib
 import json
 import os
 import time
 
 from ..calibrate import DEFAULT_TARGETS, calibrate
 from ..errors import InputError, InstabilityError
-from .loading import DEFAULT_TIMESTEP_FACTOR
 from .outputs import json_ready, write_json_atomic, write_text_atomic
 from .parameters import apply_parameters, load_parameters, save_parameters, start_parameters
+from .speed import DEFAULT_TIMESTEP_FACTOR
 
 __all__ = ["make_evaluator", "calibrate_specimens", "report_markdown"]
 
 
-def make_evaluator(specimen, *, platen_velocity=None, tension_test="direct", progress=False):
+def _finished(out):
+    """The summary of a finished test in ``out`` (None when there is none)."""
+    path = os.path.join(out, "summary.json")
+    try:
+        with open(path, encoding="utf-8") as f:
+            summary = json.load(f)
+    except (OSError, ValueError):
+        return None
+    return summary if summary.get("status") == "complete" else None
+
+
+def make_evaluator(specimen, *, platen_velocity=None, tension_test="direct", progress=False,
+                   runs_dir=None):
     """``evaluate(params) -> {"E", "UCS", "sigma_t"}`` (Pa) on one specimen.
 
-    E is the UCS test's tangent modulus at 50 % of the peak (gauge strain), UCS its peak, σt
-    the peak of a direct-tension test (or a Brazilian test on the disc cut from the specimen).
+    E is the UCS test's modulus (:func:`sim.protocols.elastic.elastic_constants`; its measured
+    value when flagged, with ``E_ok`` in the response), UCS its peak, σt the peak of a
+    direct-tension test (or a Brazilian test on the disc cut from the specimen).
+
+    With ``runs_dir`` every test writes its results into ``runs_dir/<parameter hash>/<test>``
+    (no figures), and a finished test found there is read instead of run again (the runs are
+    deterministic): an interrupted calibration resumes from its finished runs.
     """
     from .brazilian import run_brazilian
     from .tension import run_tension
@@ -38,21 +56,34 @@ def make_evaluator(specimen, *, platen_velocity=None, tension_test="direct", pro
         raise ValueError(f"'tension_test' = {tension_test!r}, expected 'direct' or 'brazilian'")
     kw = {} if platen_velocity is None else {"platen_velocity": platen_velocity}
 
-    def robust(fn, spec):
+    def robust(fn, spec, out):
         # an InstabilityError after the peak must not end a long calibration: rerun once at
         # 0.6 x the time-step factor (the rerun is recorded in the summary options)
+        if out is not None:
+            done = _finished(out)
+            if done is not None:
+                return done
+            kw_out = {"out": out, "figures": False}
+        else:
+            kw_out = {}
         try:
-            return fn(spec, progress=progress, **kw).summary
+            return fn(spec, progress=progress, **kw, **kw_out).summary
         except InstabilityError:
             f = 0.6 * (kw.get("timestep_factor") or DEFAULT_TIMESTEP_FACTOR)
-            return fn(spec, progress=progress, **{**kw, "timestep_factor": f}).summary
+            return fn(spec, progress=progress, **{**kw, "timestep_factor": f}, **kw_out).summary
 
     def evaluate(params):
         spec = apply_parameters(specimen, params)
-        u = robust(run_ucs, spec)
-        t = robust(run_tension if tension_test == "direct" else run_brazilian, spec)
-        return {"E": u["E_gpa"] * 1e9, "UCS": u["ucs_mpa"] * 1e6,
-                "sigma_t": t["tensile_mpa"] * 1e6, "nu": u["nu"],
+        base = None
+        if runs_dir is not None:
+            key = json.dumps(json_ready(params), sort_keys=True)
+            base = os.path.join(runs_dir, hashlib.sha1(key.encode()).hexdigest()[:12])
+        u = robust(run_ucs, spec, None if base is None else os.path.join(base, "ucs"))
+        t = robust(run_tension if tension_test == "direct" else run_brazilian, spec,
+                   None if base is None else os.path.join(base, "tension"))
+        e = u["E_gpa"] if u.get("E_gpa") is not None else u["elastic"]["E_measured_gpa"]
+        return {"E": e * 1e9, "UCS": u["ucs_mpa"] * 1e6,
+                "sigma_t": t["tensile_mpa"] * 1e6, "nu": u["nu"], "E_ok": u.get("E_ok"),
                 "wall_s": u["wall_s"] + t["wall_s"]}
 
     return evaluate
@@ -100,7 +131,8 @@ def report_markdown(result, targets, *, specimens=(), extra="") -> str:
 
 def calibrate_specimens(paths, *, out, params=None, targets=None, tol=0.03, accept=0.05,
                         max_evaluations=10, platen_velocity=None, tension_test="direct",
-                        progress=True, knobs=None, search_on="first", extra=()):
+                        progress=True, knobs=None, search_on="first", extra=(),
+                        resume=False):
     """Calibrate on specimen files and write the parameter file and the report into ``out``.
 
     Parameters
@@ -125,6 +157,10 @@ def calibrate_specimens(paths, *, out, params=None, targets=None, tol=0.03, acce
     extra : sequence of path
         More ``specimen.npz`` files used only in the seed rounds at the end: a held-out check
         of the searched set, whose mean over all specimens then drives the correction step.
+    resume : bool
+        Continue an interrupted calibration in ``out``: every test writes its results into
+        ``out/runs/specimen_K/<parameter hash>/`` and a finished one is read back instead of
+        run again (same specimens and options, so the search retraces its steps).
 
     Returns
     -------
@@ -143,7 +179,8 @@ def calibrate_specimens(paths, *, out, params=None, targets=None, tol=0.03, acce
     targets = dict(DEFAULT_TARGETS if targets is None else targets)
     os.makedirs(out, exist_ok=True)
     log_path = os.path.join(out, "calibration_log.jsonl")
-    open(log_path, "w").close()
+    if not resume:
+        open(log_path, "w").close()
 
     def log(rec):
         with open(log_path, "a", encoding="utf-8") as f:
@@ -156,8 +193,9 @@ def calibrate_specimens(paths, *, out, params=None, targets=None, tol=0.03, acce
                   f"{'' if rec['seed'] is None else ' seed ' + str(rec['seed'])}: {errs} "
                   f"({rec['seconds']:.0f} s)", flush=True)
 
-    evals = [make_evaluator(s, platen_velocity=platen_velocity, tension_test=tension_test)
-             for s in specs]
+    evals = [make_evaluator(s, platen_velocity=platen_velocity, tension_test=tension_test,
+                            runs_dir=os.path.join(out, "runs", f"specimen_{k}"))
+             for k, s in enumerate(specs)]
     t0 = time.perf_counter()
     kw = {} if knobs is None else {"knobs": knobs}
     failures = []

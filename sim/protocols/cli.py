@@ -1,23 +1,58 @@
-"""Subcommands of ``gbmsim`` for the test protocols (ucs, tension, brazilian, biaxial, calibrate).
+"""Subcommands of ``gbmsim`` for the laboratory tests (one per entry of
+:data:`sim.protocols.registry.TESTS`) and ``calibrate``.
 
 ``sim.cli`` calls :func:`register` with its argparse subparsers object; each subcommand sets
-``func(args) -> int`` (exit code: 0 ok, 1 finished but a target missed, 2 bad input,
-130 interrupted). No maths here: flags map 1:1 to the keywords of the protocol functions.
+``func(args) -> int`` (exit codes: 0 ok, 1 a calibration target missed, 2 bad input, 3
+numerical failure, 130 interrupted; the top-level ``gbmsim`` turns errors into codes). No maths
+here: flags map 1:1 to the options of :func:`sim.protocols.registry.run_test`.
 """
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import os
 import sys
+import warnings
 
-__all__ = ["register", "run_test_command", "run_calibrate_command"]
+__all__ = ["EXIT_CODES", "OneLineParser", "specimen_warnings", "register", "run_test_command",
+           "run_calibrate_command"]
 
-_TESTS = ("ucs", "tension", "brazilian", "biaxial")
+#: The exit codes of every command (README "Exit codes").
+EXIT_CODES = ("Exit codes: 0 ok; 1 a batch with some failures or a check/target missed; 2 bad "
+              "input (one line naming the file or field); 3 numerical failure (one line naming "
+              "cause, step and hint); 130 interrupted.")
+
+
+
+class OneLineParser(argparse.ArgumentParser):
+    """An argument parser whose usage errors are one stderr line (exit 2)."""
+
+    def error(self, message):
+        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
+
+@contextlib.contextmanager
+def specimen_warnings():
+    """Print each representativeness warning of the tests run inside as one stderr line."""
+    from .skeleton import RepresentativenessWarning
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", RepresentativenessWarning)
+        try:
+            yield
+        finally:
+            seen = []
+            for c in caught:
+                if issubclass(c.category, RepresentativenessWarning) \
+                        and str(c.message) not in seen:
+                    seen.append(str(c.message))
+            for w in seen:
+                print(f"warning: {w}", file=sys.stderr)
 
 
 def _common(p, *, rate=True):
-    from .loading import DEFAULT_PLATEN_VELOCITY, DEFAULT_POST_PEAK, DEFAULT_TIMESTEP_FACTOR
+    from ..config import DAMPING
+    from .speed import DEFAULT_PLATEN_VELOCITY, DEFAULT_POST_PEAK, DEFAULT_TIMESTEP_FACTOR
     p.add_argument("specimen", help="specimen.npz (DESIGN.md §4)")
     p.add_argument("--out", required=True, help="results directory")
     p.add_argument("--params", metavar="FILE.yaml",
@@ -34,7 +69,8 @@ def _common(p, *, rate=True):
                         f"(default {DEFAULT_POST_PEAK})")
     p.add_argument("--max-strain", type=float, default=None,
                    help="stop at this strain instead (elastic checks); disables --post-peak")
-    p.add_argument("--damping", type=float, default=0.7, help="local damping alpha (0.7)")
+    p.add_argument("--damping", type=float, default=DAMPING,
+                   help=f"local damping alpha (default {DAMPING})")
     p.add_argument("--timestep-factor", type=float, default=DEFAULT_TIMESTEP_FACTOR,
                    help="safety factor on the critical time step "
                         f"(default {DEFAULT_TIMESTEP_FACTOR}, from the convergence study)")
@@ -58,13 +94,10 @@ def _common(p, *, rate=True):
 
 
 def register(subparsers):
-    """Add ``ucs``, ``tension``, ``brazilian``, ``biaxial`` and ``calibrate`` to ``subparsers``."""
-    helps = {"ucs": "uniaxial compression between rigid frictionless platens",
-             "tension": "direct tension by pulled end groups",
-             "brazilian": "Brazilian disc (cut from the specimen), sigma_t = 2P/(pi D t)",
-             "biaxial": "biaxial compression with servo-held confinement"}
-    for name in _TESTS:
-        p = subparsers.add_parser(name, help=helps[name], description=helps[name])
+    """Add one subcommand per laboratory test and ``calibrate`` to ``subparsers``."""
+    from .registry import TESTS
+    for name, cls in TESTS.items():
+        p = subparsers.add_parser(name, help=cls.help, description=cls.help + ". " + EXIT_CODES)
         _common(p)
         p.set_defaults(func=run_test_command, test=name)
         if name == "ucs":
@@ -77,8 +110,6 @@ def register(subparsers):
                                 "(docs/labtests.md)")
             p.add_argument("--constant-speed", dest="adaptive", action="store_false",
                            help="constant platen speed (--platen-velocity, default 0.0125 m/s)")
-            p.add_argument("--e-method", choices=("tangent", "secant"), default="tangent",
-                           help="E at 50 %% of the peak: tangent (default) or secant")
         if name == "tension":
             p.add_argument("--grip-depth-mm", type=float, default=None,
                            help="depth of each pulled end group, mm (default 10 %% of H)")
@@ -92,7 +123,8 @@ def register(subparsers):
             p.add_argument("--confinement-mpa", type=float, default=20.0,
                            help="confining stress sigma3, MPa (default 20, the thesis)")
     p = subparsers.add_parser("calibrate", help="fit micro-parameters to E, UCS, sigma_t",
-                              description="Automatic calibration (docs/labtests.md).")
+                              description="Automatic calibration (docs/labtests.md). "
+                              + EXIT_CODES)
     p.add_argument("specimens", nargs="+",
                    help="specimen.npz files: the first is used for the search, all for the "
                         "seed average at the end")
@@ -113,6 +145,9 @@ def register(subparsers):
     p.add_argument("--extra", nargs="+", default=(), metavar="SPECIMEN",
                    help="specimens used only in the seed rounds at the end (held out from "
                         "the search; the mean over all specimens drives the correction)")
+    p.add_argument("--resume", action="store_true",
+                   help="continue an interrupted calibration in --out: finished tests under "
+                        "OUT/runs/ are read back instead of run again")
     p.add_argument("--no-progress", action="store_true")
     p.set_defaults(func=run_calibrate_command)
     return subparsers
@@ -128,40 +163,31 @@ def _load(args):
 
 
 def run_test_command(args) -> int:
-    """Run one laboratory test from parsed arguments; print a one-line summary."""
-    from ..errors import InputError
+    """Run one laboratory test (or an ensemble) from parsed arguments; print its numbers."""
+    from ..errors import InputError, InstabilityError
     try:
         spec = _load(args)
     except InputError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
-    from .loading import DEFAULT_PLATEN_VELOCITY
-    v = DEFAULT_PLATEN_VELOCITY if args.platen_velocity is None else args.platen_velocity
-    if args.test == "ucs" and args.platen_velocity is None:
-        v = None                    # the UCS picks the base speed of its loading mode
-    kw = dict(strain_rate=args.strain_rate, platen_velocity=v,
+    kw = dict(strain_rate=args.strain_rate, platen_velocity=args.platen_velocity,
               max_strain=args.max_strain,
               post_peak=None if args.max_strain is not None else args.post_peak,
-              damping=args.damping, timestep_factor=args.timestep_factor, out=None,
+              damping=args.damping, timestep_factor=args.timestep_factor,
               progress=not args.no_progress, checkpoint_every=args.checkpoint_every,
-              figures=not args.no_figures, resume=args.resume)
+              figures=not args.no_figures)
     if args.test == "ucs":
-        from .ucs import run_ucs as fn
-        kw["e_method"] = args.e_method
         adaptive = args.adaptive
         if adaptive is None:        # default: adaptive unless a constant speed/rate was given
             adaptive = args.platen_velocity is None and args.strain_rate is None
         kw["adaptive"] = adaptive
     elif args.test == "tension":
-        from .tension import run_tension as fn
         if args.grip_depth_mm is not None:
             kw["grip_depth"] = args.grip_depth_mm * 1e-3
     elif args.test == "brazilian":
-        from .brazilian import run_brazilian as fn
         kw.update(cut=not args.no_cut, loading=args.loading,
                   diameter=None if args.diameter_mm is None else args.diameter_mm * 1e-3)
     else:
-        from .biaxial import run_biaxial as fn
         kw["confinement"] = args.confinement_mpa * 1e6
     if args.ensemble_amplitude is not None and not args.ensemble:
         print("error: --ensemble-amplitude needs --ensemble N", file=sys.stderr)
@@ -169,15 +195,20 @@ def run_test_command(args) -> int:
     if not args.resume:             # resuming writes nothing before its files are checked
         os.makedirs(args.out, exist_ok=True)
     try:
-        if args.ensemble:
-            res = _run_ensemble(args, spec, kw)
-        else:
-            res = fn(spec, **{**kw, "out": args.out})
+        with specimen_warnings():
+            if args.ensemble:
+                res = _run_ensemble(args, spec, kw)
+            else:
+                from .registry import run_test
+                res = run_test(args.test, spec, out=args.out, resume=args.resume, **kw)
     except KeyboardInterrupt:
         what = ("finished members and the checkpoint of the running one"
                 if args.ensemble else "checkpoint and partial results")
         print(f"interrupted: {what} in {args.out}; continue with --resume", file=sys.stderr)
         return 130
+    except InstabilityError as exc:
+        print(f"numerical failure: {exc}", file=sys.stderr)
+        return 3
     except (InputError, ValueError, FileNotFoundError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
@@ -189,12 +220,16 @@ def run_test_command(args) -> int:
             for k in _ENSEMBLE_KEYS if k in st.index}}
     else:
         report = {k: res.summary[k] for k in _KEYS if k in res.summary}
+        for k in ("E", "nu"):
+            if res.summary.get(f"{k}_ok") is False:
+                print(f"warning: {k} not valid: {res.summary[f'{k}_reason']}", file=sys.stderr)
     print(json.dumps(json_ready(report)))
     return 0
 
 
 #: Numbers the test command prints.
-_KEYS = ("E_gpa", "nu", "ucs_mpa", "ci_mpa", "cd_mpa", "tensile_mpa", "steps", "wall_s")
+_KEYS = ("E_gpa", "nu", "E_ok", "nu_ok", "ucs_mpa", "ci_mpa", "cd_mpa", "tensile_mpa",
+         "steps", "wall_s")
 #: Numbers the ensemble command prints (mean, sd, ci95 of those the test reports).
 _ENSEMBLE_KEYS = ("E_gpa", "nu", "ucs_mpa", "ci_mpa", "cd_mpa", "tensile_mpa",
                   "deviatoric_peak_mpa", "P_sim.by_area", "cracks.total", "steps", "wall_s")
@@ -212,7 +247,7 @@ def _run_ensemble(args, spec, kw):
 
 def run_calibrate_command(args) -> int:
     """Calibrate from parsed arguments (see :mod:`sim.protocols.calibration`)."""
-    from ..errors import InputError
+    from ..errors import InputError, InstabilityError
     from .calibration import calibrate_specimens
     targets = {"E": args.target_e_gpa * 1e9, "UCS": args.target_ucs_mpa * 1e6,
                "sigma_t": args.target_tensile_mpa * 1e6}
@@ -222,11 +257,15 @@ def run_calibrate_command(args) -> int:
                                   max_evaluations=args.max_evaluations,
                                   platen_velocity=args.platen_velocity,
                                   tension_test=args.tension_test, search_on=args.search_on,
-                                  extra=args.extra,
+                                  extra=args.extra, resume=args.resume,
                                   progress=not args.no_progress)
     except KeyboardInterrupt:
-        print(f"interrupted: evaluations so far in {args.out}", file=sys.stderr)
+        print(f"interrupted: evaluations so far in {args.out}; continue with --resume",
+              file=sys.stderr)
         return 130
+    except InstabilityError as exc:
+        print(f"numerical failure: {exc}", file=sys.stderr)
+        return 3
     except (InputError, ValueError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
@@ -239,7 +278,7 @@ def run_calibrate_command(args) -> int:
 
 def main(argv=None) -> int:
     """Stand-alone entry (``python -m sim.protocols.cli``) for when ``sim.cli`` is absent."""
-    parser = argparse.ArgumentParser(prog="gbmsim")
+    parser = OneLineParser(prog="gbmsim")
     register(parser.add_subparsers(dest="command", required=True))
     args = parser.parse_args(argv)
     return args.func(args)

@@ -8,13 +8,15 @@ import numba
 import pandas as pd
 
 from ..analysis import crack_counts, damage_ratio
+from ..config import THICKNESS
 from . import outputs
 
 __all__ = ["TestResult", "crack_summary", "base_summary"]
 
 
 def crack_summary(cracks: pd.DataFrame) -> dict:
-    """``cracks`` (counts by kind and relation) and ``P_sim`` (by area and by count)."""
+    """``cracks`` (counts by kind and relation) and ``P_sim`` (by area and by count; crack
+    areas per unit thickness, m² per m)."""
     if len(cracks):
         counts = crack_counts(cracks["kind"], cracks["mode"], cracks["relation"])
         p = damage_ratio(cracks["mode"], cracks["size_m"].astype(float))
@@ -23,8 +25,8 @@ def crack_summary(cracks: pd.DataFrame) -> dict:
         p = damage_ratio([], [])
     return {"cracks": counts,
             "P_sim": {"by_area": p["by_area"], "by_count": p["by_count"],
-                      "area_tension_mm2": p["area_tension_m2"] * 1e6,
-                      "area_shear_mm2": p["area_shear_m2"] * 1e6}}
+                      "area_tension_m2_per_m": p["area_tension_m2"] / THICKNESS,
+                      "area_shear_m2_per_m": p["area_shear_m2"] / THICKNESS}}
 
 
 def base_summary(test: str, specimen, loop, sim, options: dict) -> dict:

@@ -4,11 +4,11 @@
 A test run with ``out`` leaves the engine state ``checkpoint.npz`` and the partial results
 ``history.csv``, ``cracks.csv`` and ``summary.json`` (status ``interrupted`` or ``running``) on
 Ctrl-C and beside every periodic checkpoint (``checkpoint_every``, see
-:func:`sim.protocols.loading.run_and_finish`). :func:`load_partial` reads and checks them before
+:func:`sim.protocols.loop.run_and_finish`). :func:`load_partial` reads and checks them before
 anything is written; the protocol rebuilds what its loop derives from the specimen (platens,
 grips, jaws, gauges, reference lengths) and :func:`restore_loop` puts the records, the step
 count, the wall time and the state of the adaptive speed rule back into its
-:class:`~sim.protocols.loading.LoadingLoop`, which then continues where the run stopped.
+:class:`~sim.protocols.loop.LoadingLoop`, which then continues where the run stopped.
 """
 from __future__ import annotations
 

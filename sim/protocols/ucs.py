@@ -3,219 +3,179 @@
 Measured (compression positive, report units in the names):
 
 - axial stress = mean platen force / (initial width × t); axial strain from the platen gap;
-- lateral strain from the side particles (one diameter deep at each face) and volumetric
-  strain = axial + lateral (specimen scale; used for CD);
-- gauge strains from an affine fit of the central half of the specimen (like strain gauges:
-  platen contact compliance excluded; used for E and ν);
+- lateral strain from the side layers and volumetric strain = axial + lateral (specimen scale;
+  used for CD); axial strain of the end layers (:mod:`sim.protocols.gauges`);
+- the gauge: strains from an affine fit of the middle half of the height across the width (less
+  a skin at the free sides), mean stress of the same particles; E and ν with their validity
+  (:mod:`sim.protocols.elastic`);
 - cumulative cracks by kind, kinetic and strain energy.
 
 Stops at ``post_peak`` × peak after the peak (default 0.8, as the thesis) or at ``max_strain``.
+The platen speed is adaptive by default (:class:`sim.protocols.speed.AdaptiveSpeed`).
 """
 from __future__ import annotations
+
+from dataclasses import dataclass
 
 import numpy as np
 
 from .. import analysis
 from ..config import THICKNESS
-from . import loading as ld
-from . import resume as rs
-from .report import TestResult, base_summary, crack_summary
+from . import gauges as gg
+from .elastic import elastic_constants
+from .options import TestOptions
+from .rig import add_platens, platen_force, platen_gap
+from .skeleton import Protocol, Rig, run_loading
+from .speed import ADAPTIVE_DEFAULT, AdaptiveSpeed, adaptive_speeds
 
-__all__ = ["run_ucs", "compression_summary"]
+__all__ = ["UCS", "run_ucs", "compression_summary", "compression_rig"]
 
 
-def compression_summary(history, *, stress_col="axial_stress_mpa", e_method="tangent",
+def compression_summary(history, *, cracks=None, gauge_box=None, link=None,
+                        stress_col="axial_stress_mpa", first_steady=0,
                         ci_fraction=analysis.CI_FRACTION) -> dict:
-    """E, ν (gauge), E from the platens, peak, CI, CD from a compression history (report units).
+    """E and ν with their validity (:func:`sim.protocols.elastic.elastic_constants`), peak,
+    CI and CD from a compression history (report units).
 
-    Uses ``gauge_axial_strain``/``gauge_lateral_strain`` for E and ν, ``axial_strain`` for the
-    platen modulus, ``volumetric_strain`` for CD and ``cracks_total`` for CI.
+    Uses ``axial_strain`` (platen gap) for the peak strain, ``volumetric_strain`` for CD and
+    ``cracks_total`` for CI.
     """
     s = history[stress_col].to_numpy(float) * 1e6
-    ga = history["gauge_axial_strain"].to_numpy(float)
-    gl = history["gauge_lateral_strain"].to_numpy(float)
     ea = history["axial_strain"].to_numpy(float)
     ip = analysis.peak_index(s)
-    return {
-        "E_gpa": analysis.young_modulus(ga, s, method=e_method) / 1e9,
-        "nu": analysis.poisson_ratio(ga, gl, s),
-        "E_platen_gpa": analysis.young_modulus(ea, s, method=e_method) / 1e9,
+    out = elastic_constants(history, cracks, gauge_box=gauge_box, link=link,
+                            stress_col=stress_col, first_steady=first_steady)
+    out.update({
         "ucs_mpa": float(s[ip]) / 1e6,
         "ci_mpa": analysis.crack_initiation(s, history["cracks_total"].to_numpy(float),
                                             fraction=ci_fraction) / 1e6,
         "cd_mpa": analysis.crack_damage(s, history["volumetric_strain"].to_numpy(float)) / 1e6,
         "peak_axial_strain": float(ea[ip]),
-        "e_method": f"{e_method} at 50 % of peak, gauge strain",
         "ci_criterion": f"cumulative cracks >= max(1, ceil({ci_fraction} x count at peak))",
         "cd_criterion": "maximum of volumetric strain before the peak",
-    }
+    })
+    return out
 
 
-def run_ucs(specimen, *, strain_rate: float | None = None,
-            platen_velocity: float | None = None,
-            post_peak: float | None = ld.DEFAULT_POST_PEAK, max_strain: float | None = None,
-            damping: float = 0.7, timestep_factor: float | None = ld.DEFAULT_TIMESTEP_FACTOR,
-            record_strain: float = ld.RECORD_STRAIN, ramp_records: int = 5,
-            e_method: str = "tangent", limit_strain: float = 0.05, out=None,
-            progress: bool = True, figures: bool = True, checkpoint_every: int = 0,
-            adaptive: bool | dict | None = None, resume: bool = False,
-            sim_options=None) -> TestResult:
+def compression_rig(specimen, x0, y0, box):
+    """The gauge and boundary readings of a compression test on ``specimen`` whose particles
+    start at ``x0``, ``y0`` inside ``box`` (the platens' and side faces' positions).
+
+    Returns
+    -------
+    read : callable
+        ``read(sim) -> dict`` of ``gauge_axial_strain``, ``gauge_lateral_strain``,
+        ``gauge_stress_xx_mpa``, ``gauge_stress_yy_mpa``, ``end_axial_strain``,
+        ``side_lateral_strain``.
+    summarize : callable
+        ``summarize(history, cracks, stress_col, first_steady) -> dict``
+        (:func:`compression_summary`).
+    """
+    margin = 4.0 * float(np.mean(specimen.r))     # two diameters: cells closed inside the packing
+    gauge = gg.gauge_indices(x0, y0, box, margin=margin)
+    mask = np.zeros(x0.size, bool)
+    mask[gauge] = True
+    area = gg.cell_area(x0, y0, gauge)
+    left, right = gg.side_indices(x0, specimen.r, box)
+    bottom, top = gg.end_indices(y0, specimen.r, box)
+    gbox = gg.gauge_box(box, margin=margin)
+    link = 2.1 * float(specimen.r.max())
+
+    def read(sim):
+        x, y = sim.x, sim.y
+        gl, ga = gg.gauge_strains(x0, y0, x, y, gauge)
+        sx, sy = gg.gauge_stress(sim, mask, area)
+        return {"gauge_axial_strain": ga, "gauge_lateral_strain": gl,
+                "gauge_stress_xx_mpa": sx / 1e6, "gauge_stress_yy_mpa": sy / 1e6,
+                "end_axial_strain": gg.layer_strain(y0, y, bottom, top),
+                "side_lateral_strain": gg.layer_strain(x0, x, left, right)}
+
+    def summarize(history, cracks, stress_col, first_steady):
+        return compression_summary(history, cracks=cracks, gauge_box=gbox, link=link,
+                                   stress_col=stress_col, first_steady=first_steady)
+
+    return read, summarize
+
+
+@dataclass
+class UCS(Protocol):
+    """Uniaxial compression between rigid frictionless platens.
+
+    Attributes
+    ----------
+    adaptive : bool or dict, optional
+        Adaptive platen speed (:class:`sim.protocols.speed.AdaptiveSpeed`): up to 0.1 m/s
+        while elastic and crack-free (capped by a kinetic/strain energy check), the base speed
+        from the first crack on. Default :data:`sim.protocols.speed.ADAPTIVE_DEFAULT` (True);
+        the base speed is then :func:`sim.protocols.speed.adaptive_speeds` of the length
+        unless ``platen_velocity`` or ``strain_rate`` is given. A dict: adaptive, with these
+        fields of :class:`~sim.protocols.speed.AdaptiveSpeed` changed (e.g. ``f_max``).
+    """
+
+    adaptive: bool | dict | None = None
+
+    name = "ucs"
+    label = "UCS"
+    help = "uniaxial compression between rigid frictionless platens"
+    record_strain = 2e-5
+    limit_strain = 0.05
+    peak = "ucs_mpa"
+    resume_keys = ("adaptive", "adaptive_rule")
+
+    def rig(self, loaded, sim, opts: TestOptions, resumed: bool, context) -> Rig:
+        adaptive = ADAPTIVE_DEFAULT if self.adaptive is None else self.adaptive
+        rule = dict(adaptive) if isinstance(adaptive, dict) else {}
+        box = loaded.box
+        h0, w0 = float(box[3] - box[2]), float(box[1] - box[0])
+        velocity = None
+        if adaptive and opts.platen_velocity is None and opts.strain_rate is None:
+            velocity, f_max = adaptive_speeds(h0)     # size-aware: cracking at a fixed rate
+            rule.setdefault("f_max", f_max)
+        speed = AdaptiveSpeed(**rule) if adaptive else None
+        lo, hi = (0, 1) if resumed else add_platens(sim, box, axis=1, fric=0.0)
+        x0, y0 = np.array(loaded.x, copy=True), np.array(loaded.y, copy=True)
+        read, summarize = compression_rig(loaded, x0, y0, box)
+
+        def drive(v):
+            sim.set_wall_velocity(lo, 0.0, v)
+            sim.set_wall_velocity(hi, 0.0, -v)
+
+        def record():
+            ea = (h0 - platen_gap(sim, lo, hi)) / h0
+            g = read(sim)
+            el = g.pop("side_lateral_strain")
+            return {"axial_strain": ea, "lateral_strain": el, "volumetric_strain": ea + el,
+                    "axial_stress_mpa": platen_force(sim, lo, hi) / (w0 * THICKNESS) / 1e6,
+                    "confining_stress_mpa": 0.0, **g}
+
+        return Rig(length=h0, drive=drive, record=record, velocity=velocity, speed=speed,
+                   summarize=lambda h, c: summarize(h, c, "axial_stress_mpa",
+                                                    opts.ramp_records),
+                   options=dict(adaptive=bool(adaptive), adaptive_rule=None if speed is None
+                                else {k: getattr(speed, k) for k in (
+                                    "f_max", "tan_fast", "tan_slow", "peak_drop", "window",
+                                    "rise", "ke_ratio", "f_peak", "tan_peak")}))
+
+
+def run_ucs(specimen, *, adaptive: bool | dict | None = None, **options):
     """Uniaxial compression of ``specimen`` between rigid frictionless platens.
 
     Parameters
     ----------
     specimen : sim.Specimen
-    strain_rate : float, 1/s, optional
-        Loading strain rate; default 2 ``platen_velocity`` / L (L the loaded length).
-    platen_velocity : float, m/s, optional
-        Speed of each platen when ``strain_rate`` is not given: the constant speed, or the
-        base (slowest) speed of the adaptive rule. Default when adaptive: the size-aware
-        base speed of :func:`sim.protocols.loading.adaptive_speeds` (0.00625 m/s up to 8 mm
-        long, then a strain rate of 1.5625/s: 0.039 m/s at 50 mm, with the fast phase capped
-        at 0.1 m/s); at constant speed
-        :data:`sim.protocols.loading.DEFAULT_PLATEN_VELOCITY` (0.0125).
-        The speed is reached after a linear ramp over the first ``ramp_records`` records.
-    post_peak : float or None
-        Stop when the stress falls below this fraction of the peak (default 0.8).
-    max_strain : float or None
-        Stop at this axial strain (elastic checks where nothing breaks).
-    damping, timestep_factor : float
-        Engine options: local damping α; safety factor on the critical step (default
-        :data:`sim.protocols.loading.DEFAULT_TIMESTEP_FACTOR` = 0.6; None: the engine's).
-    record_strain : float
-        Axial strain between history records.
-    e_method : {"tangent", "secant"}
-    limit_strain : float
-        Safety stop at this axial strain.
-    out : path, optional
-        Write the results there (and ``checkpoint.npz`` on Ctrl-C).
-    progress : bool
-        tqdm progress bar.
-    figures : bool
-        Also draw stress_strain.png and crack_map.png when writing ``out``.
-    checkpoint_every : int
-        Also checkpoint every this many records (0: only on Ctrl-C), with the partial
-        ``history.csv``, ``cracks.csv`` and ``summary.json`` (status ``running``) beside it.
-    adaptive : bool, optional
-        Adaptive platen speed (:class:`sim.protocols.loading.AdaptiveSpeed`): up to
-        0.1 m/s while elastic and crack-free (capped by a kinetic/strain energy check), the
-        base speed while cracking, softening and after the peak. Default
-        :data:`sim.protocols.loading.ADAPTIVE_DEFAULT` (True). A dict: adaptive, with these
-        fields of :class:`~sim.protocols.loading.AdaptiveSpeed` changed (e.g. ``f_max``).
-    resume : bool
-        Continue an interrupted test from ``out``: the engine state from
-        ``out/checkpoint.npz``, the records from ``out/history.csv`` and the step count and
-        record interval from ``out/summary.json`` (written on Ctrl-C and beside every
-        periodic checkpoint; :mod:`sim.protocols.resume`). Give the same specimen and options
-        as the interrupted run. A checkpoint taken between two records (Ctrl-C inside a chunk)
-        adds one record at the resume point.
-    sim_options : dict, optional
-        More keyword options for the engine's ``Simulation``.
+    adaptive : bool or dict, optional
+        See :class:`UCS`.
+    **options
+        The shared options (:class:`sim.protocols.options.TestOptions`: ``out``,
+        ``strain_rate``, ``platen_velocity``, ``post_peak``, ``max_strain``, ``damping``,
+        ``timestep_factor``, ``record_strain``, ``ramp_records``, ``limit_strain``,
+        ``progress``, ``figures``, ``checkpoint_every``, ``resume``, ``sim_options``).
 
     Returns
     -------
     result : TestResult
-        ``summary`` has ``E_gpa, nu, ucs_mpa, ci_mpa, cd_mpa, cracks, P_sim, steps, wall_s,
-        particle_steps_per_s`` (DESIGN.md §4) and more.
+        ``summary`` has ``E_gpa, nu`` (with ``E_ok``, ``nu_ok`` and reasons), ``ucs_mpa,
+        ci_mpa, cd_mpa, cracks, P_sim, steps, wall_s, particle_steps_per_s`` and more.
 
-    Raises
-    ------
-    ValueError
-        Bad rate or stop rule; with ``resume``, results of another test or specimen in ``out``
-        (FileNotFoundError: a file missing). KeyboardInterrupt is re-raised after the
-        checkpoint and the partial outputs are written.
     """
-    stop = ld.StopRule(post_peak=post_peak, max_strain=max_strain)
-    if adaptive is None:
-        adaptive = ld.ADAPTIVE_DEFAULT
-    specimen, _ = ld.relieve_overlaps(specimen.validate("specimen"))
-    rule = dict(adaptive) if isinstance(adaptive, dict) else {}
-    if platen_velocity is None:
-        if adaptive and strain_rate is None:    # size-aware: cracking at a fixed strain rate
-            platen_velocity, f_max = ld.adaptive_speeds(float(specimen.box[3] - specimen.box[2]))
-            rule.setdefault("f_max", f_max)
-        else:                                   # (unused when strain_rate is given)
-            platen_velocity = ld.DEFAULT_PLATEN_VELOCITY
-    opts = dict(damping=damping, **(sim_options or {}))
-    if timestep_factor is not None:
-        opts["timestep_factor"] = timestep_factor
-    box = specimen.box
-    if resume:
-        prev = rs.load_partial(out, "ucs", specimen.n_particles)
-        sim = prev.sim
-        lo, hi = 0, 1
-        x0, y0 = np.array(specimen.x, copy=True), np.array(specimen.y, copy=True)
-    else:
-        sim = ld.make_simulation(specimen, **opts)
-        lo, hi = ld.add_platens(sim, box, axis=1, fric=0.0)
-        x0, y0 = np.array(sim.x, copy=True), np.array(sim.y, copy=True)
-    h0 = float(box[3]) - float(box[2])
-    w0 = float(box[1] - box[0])
-    strain_rate, v = ld.loading_rate(strain_rate, platen_velocity, h0)
-    gauge = ld.gauge_indices(x0, y0, box)
-    left, right = ld.side_indices(x0, specimen.r, box)
-    chunk, max_steps = ld.loop_steps(strain_rate, float(sim.dt), record_strain=record_strain,
-                                     ramp_records=ramp_records, max_strain=max_strain,
-                                     limit_strain=limit_strain, resumed=prev if resume else None)
-
-    speed = None
-    if adaptive:
-        speed = ld.AdaptiveSpeed(**rule)
-
-    def on_chunk(k):
-        f = min(1.0, (k + 1) / max(1, ramp_records)) * loop.factor
-        sim.set_wall_velocity(lo, 0.0, f * v)
-        sim.set_wall_velocity(hi, 0.0, -f * v)
-
-    def record():
-        x, y = sim.x, sim.y
-        ea = (h0 - ld.platen_gap(sim, lo, hi)) / h0
-        el = ld.side_lateral_strain(x0, x, left, right)
-        gl, ga = ld.gauge_strains(x0, y0, x, y, gauge)
-        c = ld.crack_tally(sim)
-        ek, es = ld.energies(sim)
-        return {"step": int(sim.step), "time_s": float(sim.time), "axial_strain": ea,
-                "lateral_strain": el, "volumetric_strain": ea + el,
-                "axial_stress_mpa": ld.platen_force(sim, lo, hi) / (w0 * THICKNESS) / 1e6,
-                "confining_stress_mpa": 0.0,
-                **{f"cracks_{k}": c[k] for k in analysis.CRACK_KINDS},
-                "cracks_total": c["total"], "kinetic_energy_j": ek, "strain_energy_j": es,
-                "gauge_axial_strain": ga, "gauge_lateral_strain": gl,
-                "platen_velocity_m_per_s": v * (loop.factor if loop is not None else 1.0)}
-
-    options = dict(strain_rate_per_s=strain_rate, platen_velocity_m_per_s=v,
-                   post_peak=post_peak, max_strain=max_strain, damping=damping,
-                   timestep_factor=timestep_factor, record_strain=record_strain,
-                   e_method=e_method, chunk_steps=chunk, max_steps=max_steps,
-                   adaptive=bool(adaptive),
-                   adaptive_rule=None if speed is None else {
-                       k: getattr(speed, k) for k in ("f_max", "crack_scale", "tan_fast",
-                                                      "tan_slow", "peak_drop", "window",
-                                                      "rise", "ke_ratio", "f_peak",
-                                                      "tan_peak")})
-    if resume:
-        rs.check_options(prev, options, ("strain_rate_per_s", "platen_velocity_m_per_s",
-                                         "adaptive", "adaptive_rule", "post_peak",
-                                         "max_strain", "damping", "timestep_factor",
-                                         "record_strain"))
-    loop = ld.LoadingLoop(sim=sim, record=record, chunk=chunk, max_steps=max_steps, stop=stop,
-                          on_chunk=on_chunk, progress=progress, desc="ucs", speed=speed,
-                          checkpoint_every=checkpoint_every,
-                          checkpoint=None if out is None else f"{out}/checkpoint.npz")
-
-    def finish(figures=figures):
-        hist = loop.history()
-        cracks = ld.crack_frame(sim)
-        summary = base_summary("ucs", specimen, loop, sim, options)
-        if len(hist) > 2:
-            summary.update(compression_summary(hist, e_method=e_method))
-        summary.update(crack_summary(cracks))
-        res = TestResult(summary=summary, history=hist, cracks=cracks, sim=sim,
-                         specimen=specimen)
-        if out is not None:
-            res.write(out, figures=figures)
-        return res
-
-    if resume:
-        rs.restore_loop(loop, prev)
-    return ld.run_and_finish(loop, finish)
+    return run_loading(UCS(adaptive=adaptive), specimen, TestOptions(**options))

@@ -18,10 +18,18 @@ def test_run_one_image(tmp_path, capsys):
     img.mkdir()
     shutil.copy(SAMPLE, img / SAMPLE.name)
     out = tmp_path / "out"
-    rc = main(["run", str(img), "--out", str(out), "--no-cracks", "--no-progress", "--test", "none",
-               "--pixel-size-um", "1.43", "--width-mm", "5", "--height-mm", "10", "--seed", "2"])
+    args = ["--no-cracks", "--no-progress", "--test", "none", "--pixel-size-um", "1.43",
+            "--width-mm", "5", "--height-mm", "10"]
+    rc = main(["run", str(img), "--out", str(out), *args, "--seed", "2"])
     assert rc == 0
     summary = json.loads(capsys.readouterr().out)
+    # without --seed: the fixed default seed, and two runs build the same specimen
+    for k in (1, 2):
+        assert main(["run", str(img), "--out", str(tmp_path / f"d{k}"), *args]) == 0
+    capsys.readouterr()
+    d1, d2 = (Specimen.load(tmp_path / f"d{k}" / "specimen.npz") for k in (1, 2))
+    assert d1.meta["seed"] == d2.meta["seed"] == 1 and (d1.x == d2.x).all()
+    assert json.loads((tmp_path / "d1" / "run.json").read_text())["seed_source"] == "default"
     table = read_table(out / "semkit" / "grains.csv")  # the measured table validates
     spec = Specimen.load(out / "specimen.npz")
     assert spec.meta["source_table"].endswith("grains.csv") and spec.meta["seed"] == 2
@@ -33,9 +41,62 @@ def test_run_one_image(tmp_path, capsys):
     assert hi_mm == pytest.approx(10 * table.range_um()[:, 1].max() / 1000)
 
 
+def _one_error_line(capsys, *words):
+    err = capsys.readouterr().err
+    lines = [ln for ln in err.splitlines() if ln.strip()]
+    assert len(lines) == 1 and "Traceback" not in err, err
+    assert lines[0].startswith("gbmgen: error: ") and all(w in lines[0] for w in words), err
+    return lines[0]
+
+
 def test_run_missing_folder(tmp_path, capsys):
     assert main(["run", str(tmp_path / "none"), "--out", str(tmp_path / "o")]) == 2
-    assert "not a folder" in capsys.readouterr().err
+    _one_error_line(capsys, "not a folder")
+
+
+def test_run_bad_input_exit_2_one_line_nothing_left(tmp_path, capsys, monkeypatch):
+    """An empty folder, a corrupt image and a bad grains.csv (semkit's errors and ours): exit
+    2, one stderr line naming the file or field, and no output folder left behind."""
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    out = tmp_path / "o1"
+    assert main(["run", str(empty), "--out", str(out), "--no-progress"]) == 2
+    _one_error_line(capsys, "no image files")
+    assert not out.exists()
+    corrupt = tmp_path / "corrupt"
+    corrupt.mkdir()
+    (corrupt / "S1_pre_01.png").write_bytes(b"not an image")
+    out = tmp_path / "o2"
+    assert main(["run", str(corrupt), "--out", str(out), "--no-progress"]) == 2
+    _one_error_line(capsys, "S1_pre_01.png")
+    assert not out.exists()
+
+    def bad_table(images, sem, **kw):               # semkit writes an unusable grains.csv
+        (sem / "grains.csv").write_text("mineral,class,d_min_um\npyroxene,fine,-3\n")
+
+    monkeypatch.setattr("semkit.grains.analyse_grains_folder", bad_table)
+    img = tmp_path / "images"
+    img.mkdir()
+    out = tmp_path / "o3"
+    assert main(["run", str(img), "--out", str(out), "--no-cracks", "--no-progress"]) == 2
+    _one_error_line(capsys, "grains.csv")
+    assert not out.exists()
+    with pytest.raises(SystemExit) as exc:
+        main(["run", str(img), "--out", str(out), "--seed", "x"])
+    assert exc.value.code == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--seed" in err and "'random'" in err
+
+
+def test_run_and_build_default_seed_is_fixed_and_random_draws(tmp_path, capsys):
+    from gbmgen import config
+    a, b, c = (tmp_path / f"{k}.npz" for k in "abc")
+    for path, extra in ((a, []), (b, []), (c, ["--seed", "random"])):
+        assert main(["build", "--table", "table-4-1", "--width-mm", "3", "--height-mm", "6",
+                     "--out", str(path), "--no-progress", *extra]) == 0
+    sa, sb, sc = (Specimen.load(p) for p in (a, b, c))
+    assert sa.meta["seed"] == sb.meta["seed"] == config.DEFAULT_SEED
+    assert (sa.x == sb.x).all() and sc.meta["seed"] != config.DEFAULT_SEED
 
 
 @pytest.mark.skipif(not SAMPLE.exists(), reason="sample_images not present")
@@ -56,7 +117,8 @@ def test_run_whole_chain_sets_sem_p_beside_simulated_p(tmp_path, capsys):
     run = json.loads((out / "run.json").read_text())
     ts = run["test_summary"]
     # a bonded granite-like specimen: stiff and strong, cracks logged by kind
-    assert 20 < ts["E_gpa"] < 200 and 30 < ts["ucs_mpa"] < 500
+    assert 20 < ts["elastic"]["E_measured_gpa"] < 200 and 30 < ts["ucs_mpa"] < 500
+    assert not ts["representative"]["ok"] and ts["representative"]["warnings"]   # 3 x 6 mm
     assert ts["stop_reason"] == "post_peak" and ts["cracks"]["total"] > 0
     ucs = json.loads((out / "ucs" / "summary.json").read_text())
     assert ucs["ucs_mpa"] == pytest.approx(ts["ucs_mpa"])

@@ -25,8 +25,10 @@ TIMING = {"wall_s", "particle_steps_per_s", "consolidation_s"}
 #: the numbers each test reports (must be present, and equal after a resume)
 RESULTS = {"tension": ("tensile_mpa", "peak_tensile_strain", "E_tension_gpa"),
            "brazilian": ("tensile_mpa", "tensile_hondros_mpa", "peak_load_n_per_m"),
-           "biaxial": ("ucs_mpa", "deviatoric_peak_mpa", "E_gpa", "nu", "ci_mpa", "cd_mpa",
+           "biaxial": ("ucs_mpa", "deviatoric_peak_mpa", "nu", "ci_mpa", "cd_mpa",
                        "consolidation_steps")}
+# (the biaxial E of this 10-particle-wide packing is measured but flagged: gauge and platen
+# moduli differ by more than 15 %; its measured value is checked instead)
 
 
 @pytest.fixture(scope="module")
@@ -96,6 +98,8 @@ def test_interrupted_and_resumed_gives_the_uninterrupted_result(rock, reference,
     assert b["steps"] == a["steps"] and b["cracks"] == a["cracks"] and b["cracks"]["total"] > 0
     for k in RESULTS[test]:
         assert math.isfinite(b[k]), k
+    if test == "biaxial":
+        assert math.isfinite(b["elastic"]["E_measured_gpa"])
     assert_same_summary(a, b)
     pd.testing.assert_frame_equal(res.history, ref.history, rtol=1e-12)
     pd.testing.assert_frame_equal(res.cracks.reset_index(drop=True),

@@ -1,4 +1,8 @@
-"""Quick analytic verification of the engine (``gbmsim verify``, REFERENCE.md §6)."""
+"""``gbmsim verify``: short analytic checks of the engine (REFERENCE.md §6).
+
+Kept apart from :mod:`sim.measure` (observables, imported by the engine) because the checks
+run the engine itself.
+"""
 from __future__ import annotations
 
 import numpy as np
