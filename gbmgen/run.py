@@ -186,13 +186,16 @@ def run(images_dir="sample_images", out="gbmgen_run", *, minerals=DEFAULT_MINERA
     timing = {}
     t0 = time.perf_counter()
     from semkit.workflow import analyse_folder  # one semkit pass per image: cracks and grains
-    analyse_folder(images_dir, sem, jobs=jobs, progress=progress, pixel_size_um=pixel_size_um,
-                   classes=classes, seed=seed, grains=True, minerals=minerals,
-                   crack_tables=cracks)
+    images, _ = analyse_folder(images_dir, sem, jobs=jobs, progress=progress,
+                               pixel_size_um=pixel_size_um, classes=classes, seed=seed,
+                               grains=True, minerals=minerals, crack_tables=cracks)
     timing["semkit"] = time.perf_counter() - t0
     table_path = sem / "grains.csv"
     if not table_path.exists():
-        raise InputError(f"{table_path}: semkit wrote no grain-size table")
+        failed = images[images["error"].notna()] if "error" in images else images.iloc[:0]
+        why = "; ".join(f"{r.image}: {r.error}" for r in failed.head(3).itertuples())
+        raise InputError(f"{why}; semkit wrote no grain-size table" if why
+                         else f"{table_path}: semkit wrote no grain-size table")
     table = read_table(table_path)
     t0 = time.perf_counter()
     build_options.setdefault("width_mm", 25.0)

@@ -3,6 +3,7 @@ import json
 import pathlib
 import shutil
 
+import pandas as pd
 import pytest
 
 from gbmgen.cli import main
@@ -72,9 +73,11 @@ def test_run_bad_input_exit_2_one_line_nothing_left(tmp_path, capsys, monkeypatc
     assert not out.exists()
 
     def bad_table(images, sem, **kw):               # semkit writes an unusable grains.csv
+        sem.mkdir(parents=True, exist_ok=True)
         (sem / "grains.csv").write_text("mineral,class,d_min_um\npyroxene,fine,-3\n")
+        return pd.DataFrame({"image": ["a.png"], "error": [None]}), pd.DataFrame()
 
-    monkeypatch.setattr("semkit.grains.analyse_grains_folder", bad_table)
+    monkeypatch.setattr("semkit.workflow.analyse_folder", bad_table)
     img = tmp_path / "images"
     img.mkdir()
     out = tmp_path / "o3"
