@@ -47,6 +47,17 @@ def format_value(v, digits=4) -> str:
     return str(v)
 
 
+def _is_text(cell) -> bool:
+    """A cell shown left-aligned: text that is not a number."""
+    if not isinstance(cell, str):
+        return False
+    try:
+        float(cell.split(" ± ")[0])
+    except ValueError:
+        return cell != "–"
+    return False
+
+
 def _png_data(path) -> str:
     """Base64 PNG of an image file, scaled down to MAX_WIDTH_PX wide."""
     import cv2
@@ -124,7 +135,7 @@ class Report:
                 head = "".join(f'<th class="t">{e(str(c))}</th>' if k == 0 else
                                f"<th>{e(str(c))}</th>" for k, c in enumerate(cols))
                 body = "".join("<tr>" + "".join(
-                    f'<td class="t">{e(format_value(c))}</td>' if k == 0 else
+                    f'<td class="t">{e(format_value(c))}</td>' if k == 0 or _is_text(c) else
                     f"<td>{e(format_value(c))}</td>" for k, c in enumerate(r)) + "</tr>"
                     for r in rows)
                 cap_html = f"<caption>{e(cap)}</caption>" if cap else ""

@@ -22,6 +22,7 @@ __all__ = ["findings", "draw_figures", "write_study_report", "seed_spread"]
 _LABEL = {"ucs_mpa": "UCS (MPa)", "E_gpa": "E (GPa)", "nu": "Poisson's ratio",
           "hole_damage_damaged_area_mm2": "damaged area (mm²)",
           "hole_damage_crack_joins_holes": "share of runs with a crack joining the holes",
+          "hole_damage_max_displacement_mm": "max displacement (mm)",
           "MHI_realised": "MHI (realised)"}
 
 
@@ -53,7 +54,7 @@ def seed_spread(frame, key, metric):
 
 def _extreme(s, key, metric, fn):
     s = s.dropna(subset=[f"{metric}_mean"])
-    if len(s) == 0:
+    if s[key].nunique() < 2:            # no extreme among fewer than two cases
         return None
     return s.loc[getattr(s[f"{metric}_mean"], fn)(), key]
 
@@ -121,13 +122,13 @@ def findings(name, frame):
         for word, fn, th in (("largest", "idxmax", th_br),
                              ("smallest", "idxmin",
                               min(THESIS_CH6_BRIDGE_R, key=THESIS_CH6_BRIDGE_R.get))):
-            at = float(br.loc[getattr(br["mean"], fn)(), "bridge_r"]) if len(br) else None
+            at = float(br.loc[getattr(br["mean"], fn)(), "bridge_r"]) if len(br) > 1 else None
             rows.append([f"{word} damaged area at bridge length (R)", f"{th:g}",
                          "–" if at is None else f"{at:g}",
                          None if at is None else math.isclose(at, th)])
         for word, fn, th in (("largest", "idxmax", 60.0), ("smallest", "idxmin", 150.0)):
-            at = float(an.loc[getattr(an["mean"], fn)(), "bridge_angle_deg"]) if len(an) \
-                else None
+            at = (float(an.loc[getattr(an["mean"], fn)(), "bridge_angle_deg"]) if len(an) > 1
+                  else None)
             rows.append([f"{word} damaged area at bridge angle (deg)", f"{th:g}",
                          "–" if at is None else f"{at:g}",
                          None if at is None else math.isclose(at, th)])
@@ -225,8 +226,9 @@ def draw_figures(name, frame, folder) -> list:
             ax.set_xlabel(xlabel)
             ax.set_ylabel("damaged area, this model (mm²)", color="tab:red")
             ax2 = ax.twinx()
-            ax2.plot(list(ref), list(ref.values()), "s--", color="0.3",
-                     label="thesis (REFERENCE.md)")
+            ax2.plot(list(ref), list(ref.values()), "s--" if len(ref) > 2 else "s",
+                     color="0.3", label="thesis (REFERENCE.md)" if len(ref) > 2 else
+                     "thesis: largest and smallest (REFERENCE.md)")
             ax2.set_ylabel("damaged area, thesis (mm², its definition)", color="0.3")
             h1, l1 = ax.get_legend_handles_labels()
             h2, l2 = ax2.get_legend_handles_labels()
@@ -242,6 +244,21 @@ def draw_figures(name, frame, folder) -> list:
         ax.legend(fontsize=7)
         save(fig, f"{name}_ucs.png", "UCS by bridge angle, one line per bridge length")
     return out
+
+
+def _mean_sd(mean, sd) -> str:
+    """``"12.3 ± 0.4"`` (4 significant digits; '–' for no value).
+
+    Examples
+    --------
+    >>> _mean_sd(135.04, 2.345), _mean_sd(1.0, float("nan")), _mean_sd(float("nan"), 1.0)
+    ('135 ± 2.345', '1', '–')
+    """
+    from .report import format_value
+    if mean is None or math.isnan(mean):
+        return "–"
+    return format_value(mean) + ("" if sd is None or math.isnan(sd) else
+                                 f" ± {format_value(sd)}")
 
 
 def write_study_report(out, name, frame, *, seeds, size_mm, command="") -> tuple:
@@ -263,11 +280,12 @@ def write_study_report(out, name, frame, *, seeds, size_mm, command="") -> tuple
     rep.heading("Findings beside the thesis")
     rows = findings(name, frame)
     rep.table(["finding", "thesis", "this model", "agree"], rows)
-    rep.heading("Cases (mean, seed sd, runs with a value)")
+    rep.heading("Cases: mean ± sample sd over the seeds")
     s = case_summary(st, frame)
-    cols = list(st.case_keys) + ["runs", "ok"] + [c for m in st.metrics
-                                                  for c in (f"{m}_mean", f"{m}_sd")]
-    rep.frame(s[[c for c in cols if c in s]] if len(s) else s)
+    rep.table(list(st.case_keys) + ["runs", "ok"] + [_LABEL.get(m, m) for m in st.metrics],
+              [[r[k] for k in st.case_keys] + [r["runs"], r["ok"]]
+               + [_mean_sd(r[f"{m}_mean"], r[f"{m}_sd"]) for m in st.metrics]
+               for _, r in s.iterrows()])
     if name == "thesis-ch4-scenarios" and len(s):
         rep.table(["scenario", "thesis MHI", "thesis UCS (MPa)", "thesis E (GPa)"],
                   [[f"S{k}", v["MHI"], "–".join(map(str, v["ucs_mpa"])),

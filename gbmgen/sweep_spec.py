@@ -135,13 +135,13 @@ class Run:
         return {"run_id": self.run_id, "config": self.config, "files": self.files}
 
 
-def _test_defaults(name):
+def _test_defaults(name, where):
     from sim.protocols.options import TestOptions
     from sim.protocols.registry import protocol
     try:
         cls = protocol(name)
     except ValueError as exc:
-        raise InputError(f"test: {exc}") from None
+        raise InputError(f"{where}: test: {exc}") from None
     shared = {f.name: f.default for f in dataclasses.fields(TestOptions)
               if f.name not in MANAGED_TEST_KEYS}
     own = {f.name: (f.default if f.default is not dataclasses.MISSING else
@@ -150,7 +150,7 @@ def _test_defaults(name):
     return cls, shared, own
 
 
-def _input_file(value, role, base, files, inputs):
+def _input_file(value, role, base, files, inputs, where):
     """A table or parameter file: its text goes to the worker, its hash into the identity."""
     from .params import PRESETS
     from .table import EXAMPLE_TABLES
@@ -162,7 +162,7 @@ def _input_file(value, role, base, files, inputs):
     try:
         text = path.read_text(encoding="utf-8")
     except OSError:
-        raise InputError(f"{role}: {value!r} is neither a file nor one of "
+        raise InputError(f"{where}: {role}: {value!r} is neither a file nor one of "
                          f"{', '.join(names)}") from None
     files[role] = text
     files[role + "_suffix"] = path.suffix
@@ -173,7 +173,7 @@ def _input_file(value, role, base, files, inputs):
 def _normalise(options: dict, base: pathlib.Path, where: str) -> Run:
     build, defect, test_given = {}, {}, {}
     test = options.get("test", "ucs")
-    cls, shared, own = _test_defaults(test)
+    cls, shared, own = _test_defaults(test, where)
     for key, value in options.items():
         if key == "test":
             continue
@@ -191,8 +191,8 @@ def _normalise(options: dict, base: pathlib.Path, where: str) -> Run:
                              f"{', '.join(sorted(set(shared) | set(own)))})")
     files, inputs = {}, {}
     build = {**BUILD_KEYS, **build}
-    build["table"] = _input_file(build["table"], "table", base, files, inputs)
-    build["params"] = _input_file(build["params"], "params", base, files, inputs)
+    build["table"] = _input_file(build["table"], "table", base, files, inputs, where)
+    build["params"] = _input_file(build["params"], "params", base, files, inputs, where)
     if build["table"] is None and build["shape"] is None:
         raise InputError(f"{where}: give 'table' (a grains.csv or table-4-1) or 'shape'")
     defect = {**DEFECT_KEYS, **defect}

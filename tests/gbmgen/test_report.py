@@ -1,0 +1,121 @@
+"""Reports: ``gbmgen run`` and a study write a self-contained report.html (opened here in Debian's
+headless chromium through Playwright: no console error, every image decoded, the tables there)
+and the same content as report.md."""
+import doctest
+import pathlib
+import re
+import shutil
+import warnings
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from gbmgen import report as report_module
+from gbmgen.study_report import write_study_report
+
+SAMPLES = pathlib.Path(__file__).resolve().parents[2] / "sample_images"
+CHROMIUM = "/usr/bin/chromium"
+ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--no-first-run",
+        "--disable-background-networking", "--disable-component-update", "--disable-sync"]
+
+
+def test_docstring_examples():
+    res = doctest.testmod(report_module)
+    assert res.failed == 0 and res.attempted > 0
+
+
+@pytest.fixture(scope="module")
+def run_folder(tmp_path_factory):
+    """A tiny ``gbmgen run``: one SEM image, a 2.5 x 5 mm specimen, a short UCS."""
+    if not (SAMPLES / "S1_fail_01.png").exists():
+        pytest.skip("sample_images not present")
+    from gbmgen.run import run
+    img = tmp_path_factory.mktemp("images")
+    shutil.copy(SAMPLES / "S1_fail_01.png", img)
+    shutil.copy(SAMPLES / "manifest.csv", img)
+    out = tmp_path_factory.mktemp("run") / "out"
+    with warnings.catch_warnings():            # a 2.5 mm specimen is not representative
+        warnings.simplefilter("ignore")
+        run(img, out, progress=False, width_mm=2.5, height_mm=5.0,
+            test_options={"platen_velocity": 0.05, "max_strain": 0.002})
+    return out
+
+
+@pytest.fixture(scope="module")
+def study_folder(tmp_path_factory):
+    """A study report from a made-up results table (two bridge lengths x two angles x 2
+    seeds), as the double-hole study writes it."""
+    rows = []
+    for b in (0.75, 1.5):
+        for a in (0, 60):
+            for seed in (1, 2):
+                rows.append({"status": "ok", "bridge_mm": b, "bridge_angle_deg": a,
+                             "hole_diameter_mm": 1.5, "seed": seed, "ucs_mpa": 100.0 + a,
+                             "E_gpa": 60.0, "hole_damage_damaged_area_mm2": 1.0 + a / 60 + seed,
+                             "hole_damage_crack_joins_holes": a == 60,
+                             "hole_damage_max_displacement_mm": 0.1})
+    out = tmp_path_factory.mktemp("study")
+    write_study_report(out, "thesis-ch6-double-holes", pd.DataFrame(rows), seeds=2,
+                       size_mm=(12.5, 25.0))
+    return out
+
+
+def test_run_report_content(run_folder):
+    md = (run_folder / "report.md").read_text()
+    html = (run_folder / "report.html").read_text()
+    for text in ("damage ratio P", "MHI (Equ. 4-3)", "E (GPa)", "Poisson",
+                 "specimen representative"):
+        assert text in md and text in html
+    links = re.findall(r"!\[[^\]]*\]\(([^)]+)\)", md)
+    assert len(links) >= 5                    # overlay, sizes, specimen, curve, crack map
+    for link in links:                         # report.md shows the figures from files
+        assert (run_folder / link).is_file(), link
+    # self-contained: every image inline, nothing fetched from anywhere
+    assert html.count('src="data:image/png;base64,') == len(links)
+    assert not re.search(r'(src|href)="(?!data:)', html)
+
+
+def _open(page, path):
+    errors = []
+    page.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
+    page.on("pageerror", lambda e: errors.append(str(e)))
+    page.on("requestfailed", lambda r: errors.append(f"request failed: {r.url}"))
+    page.goto(pathlib.Path(path).resolve().as_uri())
+    page.wait_for_load_state("load")
+    images = page.evaluate("""() => Array.from(document.images).map(
+        i => [i.complete, i.naturalWidth, i.naturalHeight])""")
+    tables = page.evaluate("() => document.querySelectorAll('table tbody tr').length")
+    return errors, images, tables
+
+
+def test_reports_open_in_headless_chromium(run_folder, study_folder):
+    try:
+        from playwright.sync_api import Error, sync_playwright
+    except ImportError:
+        pytest.skip("playwright is not installed (pip install playwright)")
+    if not pathlib.Path(CHROMIUM).exists():
+        pytest.skip(f"Debian's chromium is not installed at {CHROMIUM} (apt-get install "
+                    "chromium)")
+    with sync_playwright() as p:
+        try:
+            browser = p.chromium.launch(executable_path=CHROMIUM, args=ARGS)
+        except Error as exc:
+            pytest.skip(f"chromium at {CHROMIUM} does not start: {str(exc).splitlines()[0]}")
+        try:
+            for folder, n_images in ((run_folder, 5), (study_folder, 2)):
+                errors, images, rows = _open(browser.new_page(), folder / "report.html")
+                assert errors == [], errors
+                assert len(images) >= n_images
+                assert all(c and w > 0 and h > 0 for c, w, h in images), images
+                assert rows >= 3
+        finally:
+            browser.close()
+
+
+def test_study_report_findings(study_folder):
+    md = (study_folder / "report.md").read_text()
+    # made-up table: damaged area larger at 60 than at 0 deg, equal over the bridges
+    assert "| largest damaged area at bridge angle (deg) | 60 | 60 | True |" in md
+    assert "| smallest damaged area at bridge angle (deg) | 150 | 0 | False |" in md
+    assert np.isclose(float(re.search(r"\| 0\.75 \| 60 \| 2 \| 2 \| ([\d.]+) ±", md)[1]), 3.5)
