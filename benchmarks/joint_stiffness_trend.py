@@ -121,7 +121,8 @@ def main(argv=None):
                              "f": f, "n_particles": spec.n_particles,
                              "n_grains": spec.n_grains,
                              "joint_fraction": float(np.mean(spec.bond_kind == 1)),
-                             "E_gpa": s["E_gpa"], "nu": s["nu"], "steps": s["steps"],
+                             "E_gpa": s["elastic"]["E_measured_gpa"], "E_ok": s["E_ok"],
+                             "nu": s["elastic"]["nu_measured"], "steps": s["steps"],
                              "wall_s": wall,
                              "particle_steps_per_s": spec.n_particles * s["steps"] / wall,
                              "threads": s["threads"], "params": a.params})

@@ -3,7 +3,7 @@
 Runs the UCS protocol (80 % post-peak stop, default time-step factor) on each specimen with
 each loading mode and prints one JSON line per run (wall s, steps, UCS, E, errors against the
 reference mode = the last one given). Modes: ``const:V`` (constant platen speed V m/s) and
-``adaptive`` (the default adaptive rule, :data:`sim.protocols.loading.ADAPTIVE_DEFAULT`),
+``adaptive`` (the default adaptive rule, :data:`sim.protocols.speed.ADAPTIVE_DEFAULT`),
 ``adaptive:VBASE[:FMAX[:FPEAK]]`` (same rule, another base speed, largest factor and factor
 near the peak).
 
@@ -42,7 +42,7 @@ def mode_options(mode):
 
 
 def run_mode(spec, mode, factor=None):
-    from sim.protocols import loading as ld
+    from sim.protocols import speed as ld
     from sim.protocols.ucs import run_ucs
     kw = mode_options(mode)
     if factor is not None:
@@ -53,7 +53,8 @@ def run_mode(spec, mode, factor=None):
     s = r.summary
     return {"mode": mode, "steps": s["steps"], "wall_s": round(wall, 2),
             "n_particles": s["n_particles"], "ucs_mpa": s["ucs_mpa"], "E_gpa": s["E_gpa"],
-            "nu": s["nu"], "cracks": s["cracks"]["total"], "stop_reason": s["stop_reason"],
+            "nu": s["nu"], "E_ok": s["E_ok"], "elastic": s["elastic"],
+            "cracks": s["cracks"]["total"], "stop_reason": s["stop_reason"],
             "peak_axial_strain": s.get("peak_axial_strain"),
             "timestep_factor": ld.DEFAULT_TIMESTEP_FACTOR if factor is None else factor}
 

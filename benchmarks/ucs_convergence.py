@@ -94,7 +94,7 @@ def main(argv=None):
     p.add_argument("--keep-params", action="store_true",
                    help="use the specimen's own micro-parameters (default: start_parameters)")
     a = p.parse_args(argv)
-    from sim.protocols.loading import DEFAULT_PLATEN_VELOCITY  # noqa: F401 (import check)
+    from sim.protocols.speed import DEFAULT_PLATEN_VELOCITY  # noqa: F401 (import check)
     spec, source = _specimen(a.specimen, a.seed)
     if not a.keep_params:
         from sim.protocols.parameters import apply_parameters, start_parameters

@@ -20,7 +20,8 @@ import time
 
 import numpy as np
 
-KEYS = ("ucs_mpa", "E_gpa", "ci_mpa", "cd_mpa")
+#: Numbers summarised (E as measured: an ensemble member's E may be flagged, see E_ok).
+KEYS = ("ucs_mpa", "elastic.E_measured_gpa", "ci_mpa", "cd_mpa")
 
 
 def summarise(name, amplitude, res):

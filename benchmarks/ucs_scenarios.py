@@ -29,7 +29,7 @@ def markdown_table(rows):
     for sc, scale in cases:
         r = [x for x in rows if x["scenario"] == sc and x["scale"] == scale]
         u = np.array([x["ucs_mpa"] for x in r])
-        e = np.array([x["E_gpa"] for x in r])
+        e = np.array([x["E_gpa"] for x in r if x["E_gpa"] is not None])
         m = [x["mhi_realised"] for x in r if x["mhi_realised"] is not None]
         g = np.mean([x["n_grains"] for x in r])
         jf = [x["joint_fraction"] for x in r if "joint_fraction" in x]
@@ -37,7 +37,9 @@ def markdown_table(rows):
         lines.append(f"| S{sc} | ×{scale:g} | {np.mean(m) if m else float('nan'):.2f} | "
                      f"{g:.0f} | {np.mean(jf) if jf else float('nan'):.2f} | "
                      f"{u.mean():.1f} ± {u.std(ddof=1) if len(u) > 1 else 0:.1f} | "
-                     f"{e.mean():.1f} ± {e.std(ddof=1) if len(e) > 1 else 0:.1f} | "
+                     + (f"{e.mean():.1f} ± {e.std(ddof=1) if len(e) > 1 else 0:.1f}"
+                        if len(e) else "–")
+                     + (f" ({len(r) - len(e)} invalid)" if len(e) < len(r) else "") + " | "
                      + (f"{th[0][0]}–{th[0][1]} | {th[1][0]}–{th[1][1]}" if th else "– | –")
                      + f" | {len(r)} |")
     return "\n".join(lines) + "\n"
@@ -68,7 +70,7 @@ def add_specimen_options(p, *, width_mm, height_mm):
     p.add_argument("--height-mm", type=float, default=height_mm)
     p.add_argument("--particle-radius-mm", type=float, default=0.1)
     p.add_argument("--no-seat-faces", dest="seat_faces", action="store_false",
-                   help="specimens without face seating (the results up to the seventh session)")
+                   help="specimens without face seating (the results of 2026-11-21)")
 
 
 def main(argv=None):
@@ -124,7 +126,9 @@ def main(argv=None):
                          "n_particles": spec.n_particles, "n_grains": spec.n_grains,
                          "joint_fraction": float(np.mean(spec.bond_kind == 1)),
                          "mhi_realised": mhi, "ucs_mpa": s["ucs_mpa"], "E_gpa": s["E_gpa"],
-                         "nu": s["nu"], "cracks": s["cracks"]["total"],
+                         "nu": s["nu"], "E_ok": s["E_ok"], "nu_ok": s["nu_ok"],
+                         "E_reason": s["E_reason"], "elastic": s["elastic"],
+                         "cracks": s["cracks"]["total"],
                          "wall_s": time.perf_counter() - t0, "steps": s["steps"],
                          "force_chunks": s["force_chunks"], "threads": s["threads"],
                          "params": a.params, "seat_faces": a.seat_faces})

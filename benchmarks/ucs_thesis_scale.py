@@ -22,13 +22,14 @@ import time
 
 def _probe(spec, a):
     """Time ``a.probe_steps`` steps of the UCS set-up and extrapolate the full run."""
-    from sim.protocols import loading as ld
-    factor = a.timestep_factor or ld.DEFAULT_TIMESTEP_FACTOR
-    v = a.platen_velocity or ld.DEFAULT_PLATEN_VELOCITY
-    spec, _ = ld.relieve_overlaps(spec)
+    from sim.protocols import rig
+    from sim.protocols.speed import DEFAULT_PLATEN_VELOCITY, DEFAULT_TIMESTEP_FACTOR
+    factor = a.timestep_factor or DEFAULT_TIMESTEP_FACTOR
+    v = a.platen_velocity or DEFAULT_PLATEN_VELOCITY
+    spec, _ = rig.relieve_overlaps(spec)
     t0 = time.perf_counter()
-    sim = ld.make_simulation(spec, timestep_factor=factor)
-    lo, hi = ld.add_platens(sim, spec.box)
+    sim = rig.make_simulation(spec, timestep_factor=factor)
+    lo, hi = rig.add_platens(sim, spec.box)
     setup = time.perf_counter() - t0
     sim.set_wall_velocity(lo, 0.0, v)
     sim.set_wall_velocity(hi, 0.0, -v)
@@ -138,7 +139,8 @@ def main(argv=None):
            "wall_s": wall, "loop_wall_s": s["wall_s"],
            "particle_steps_per_s": s["particle_steps_per_s"], "strain_reached": strain,
            "stop_reason": s["stop_reason"], "ucs_mpa": s.get("ucs_mpa"),
-           "E_gpa": s.get("E_gpa"), "nu": s.get("nu"), "ci_mpa": s.get("ci_mpa"),
+           "E_gpa": s.get("E_gpa"), "nu": s.get("nu"), "E_ok": s.get("E_ok"),
+           "nu_ok": s.get("nu_ok"), "elastic": s.get("elastic"), "ci_mpa": s.get("ci_mpa"),
            "cd_mpa": s.get("cd_mpa"), "peak_axial_strain": s.get("peak_axial_strain"),
            "cracks": s.get("cracks"), "options": s["options"], "mode": a.mode or "default",
            "params": a.params or "specimen's own", "full_run_wall_s_estimate": full,

@@ -213,7 +213,7 @@ def build_specimen(table: GrainSizeTable | None = None, *, width_mm, height_mm, 
     seat_faces : bool
         Seat the packing on the four box faces (:func:`gbmgen.faces.seat_faces`: no dents
         under a platen). Default on; off reproduces, seed for seed, the specimens built
-        before seating existed (the results in benchmarks/ up to the seventh session).
+        before seating existed (the results in benchmarks/ dated 2026-11-21, CHANGELOG).
     bond_gap_mm : float, optional
         Bond gap, mm; default ``BOND_GAP_PER_RADIUS`` x mean radius (thesis 0.05 mm at 0.1 mm).
     params : str or Params

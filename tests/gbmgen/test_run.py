@@ -18,10 +18,18 @@ def test_run_one_image(tmp_path, capsys):
     img.mkdir()
     shutil.copy(SAMPLE, img / SAMPLE.name)
     out = tmp_path / "out"
-    rc = main(["run", str(img), "--out", str(out), "--no-cracks", "--no-progress", "--test", "none",
-               "--pixel-size-um", "1.43", "--width-mm", "5", "--height-mm", "10", "--seed", "2"])
+    args = ["--no-cracks", "--no-progress", "--test", "none", "--pixel-size-um", "1.43",
+            "--width-mm", "5", "--height-mm", "10"]
+    rc = main(["run", str(img), "--out", str(out), *args, "--seed", "2"])
     assert rc == 0
     summary = json.loads(capsys.readouterr().out)
+    # without --seed: the fixed default seed, and two runs build the same specimen
+    for k in (1, 2):
+        assert main(["run", str(img), "--out", str(tmp_path / f"d{k}"), *args]) == 0
+    capsys.readouterr()
+    d1, d2 = (Specimen.load(tmp_path / f"d{k}" / "specimen.npz") for k in (1, 2))
+    assert d1.meta["seed"] == d2.meta["seed"] == 1 and (d1.x == d2.x).all()
+    assert json.loads((tmp_path / "d1" / "run.json").read_text())["seed_source"] == "default"
     table = read_table(out / "semkit" / "grains.csv")  # the measured table validates
     spec = Specimen.load(out / "specimen.npz")
     assert spec.meta["source_table"].endswith("grains.csv") and spec.meta["seed"] == 2
