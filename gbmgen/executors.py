@@ -105,8 +105,9 @@ class DaskExecutor:
         self._futures = {}
 
     def run(self, payloads):
-        from distributed import as_completed
         import uuid
+
+        from distributed import as_completed
         tag = uuid.uuid4().hex[:8]
         self._futures = {self._client.submit(execute_run, p, pure=False,
                                              key=f"rockkit-run-{p['run_id']}-{tag}"):

@@ -47,6 +47,10 @@ def format_value(v, digits=4) -> str:
     return str(v)
 
 
+def _md_cell(cell) -> str:
+    return format_value(cell).replace("|", "\\|")
+
+
 def _is_text(cell) -> bool:
     """A cell shown left-aligned: text that is not a number."""
     if not isinstance(cell, str):
@@ -161,10 +165,9 @@ class Report:
                 _, cols, rows, cap = b
                 if cap:
                     lines += [f"*{cap}*", ""]
-                cell = (lambda c: format_value(c).replace("|", "\\|"))
-                lines += ["| " + " | ".join(cell(c) for c in cols) + " |",
+                lines += ["| " + " | ".join(_md_cell(c) for c in cols) + " |",
                           "|" + "---|" * len(cols)]
-                lines += ["| " + " | ".join(cell(c) for c in r) + " |" for r in rows]
+                lines += ["| " + " | ".join(_md_cell(c) for c in r) + " |" for r in rows]
                 lines.append("")
             else:
                 _, path, cap = b

@@ -203,8 +203,8 @@ def case_summary(st: Study, frame):
     >>> f = pd.DataFrame({"scenario": [1, 1, 2], "scale": [1.0] * 3, "status": ["ok"] * 3,
     ...                   "ucs_mpa": [100.0, 110.0, 150.0], "E_gpa": [60.0, 62.0, 70.0]})
     >>> s = case_summary(STUDIES["thesis-ch4-scenarios"], f)
-    >>> s[["scenario", "runs", "ucs_mpa_mean", "ucs_mpa_n"]].values.tolist()
-    [[1, 2, 105.0, 2], [2, 1, 150.0, 1]]
+    >>> s[["scenario", "runs", "ucs_mpa_mean", "ucs_mpa_n"]].to_dict("records")[0]
+    {'scenario': 1, 'runs': 2, 'ucs_mpa_mean': 105.0, 'ucs_mpa_n': 2}
     """
     import pandas as pd
     rows = []

@@ -14,8 +14,15 @@ import pathlib
 import numpy as np
 
 from .report import Report
-from .study import (CH6_RADIUS_MM, THESIS_CH4, THESIS_CH5, THESIS_CH6_ANGLE,
-                    THESIS_CH6_BRIDGE_R, THESIS_SIZE_MM, case_summary)
+from .study import (
+    CH6_RADIUS_MM,
+    THESIS_CH4,
+    THESIS_CH5,
+    THESIS_CH6_ANGLE,
+    THESIS_CH6_BRIDGE_R,
+    THESIS_SIZE_MM,
+    case_summary,
+)
 
 __all__ = ["findings", "draw_figures", "write_study_report", "seed_spread"]
 

@@ -1,7 +1,6 @@
 """Damage around holes (sim.hole_damage): exact answers on hand-made arrays, and the measures in
 the summary.json of a test on a specimen with holes (thesis Ch. 6)."""
 import doctest
-import json
 
 import numpy as np
 import pytest
