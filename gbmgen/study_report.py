@@ -291,8 +291,10 @@ def write_study_report(out, name, frame, *, seeds, size_mm, command="") -> tuple
     s = case_summary(st, frame)
     rep.table(list(st.case_keys) + ["runs", "ok"] + [_LABEL.get(m, m) for m in st.metrics],
               [[r[k] for k in st.case_keys] + [r["runs"], r["ok"]]
-               + [_mean_sd(r[f"{m}_mean"], r[f"{m}_sd"]) for m in st.metrics]
-               for _, r in s.iterrows()])
+               + [_mean_sd(r[f"{m}_mean"], r[f"{m}_sd"])
+                  + (f" (n={r[f'{m}_n']})" if 0 < r[f"{m}_n"] < r["ok"] else "")
+                  for m in st.metrics]
+               for _, r in s.iterrows()], "n: runs with a valid value, where fewer than ok")
     if name == "thesis-ch4-scenarios" and len(s):
         rep.table(["scenario", "thesis MHI", "thesis UCS (MPa)", "thesis E (GPa)"],
                   [[f"S{k}", v["MHI"], "–".join(map(str, v["ucs_mpa"])),
