@@ -125,8 +125,7 @@ def _study(args) -> int:
         report = run_sweep(runs, a.out, sweep_text=text, name=a.name, workers=a.workers,
                            scheduler=a.scheduler, progress=not a.no_progress,
                            retry_failed=a.retry_failed)
-        frame = pd.read_csv(f"{a.out}/results.csv") if report.done_before + report.computed \
-            else pd.DataFrame(columns=["status"])
+        frame = pd.read_csv(f"{a.out}/results.csv")
         command = " ".join(["gbmsim", "study", a.name, "--seeds", str(seeds), "--size-mm",
                             f"{size[0]:g}", f"{size[1]:g}", "--out", str(a.out)])
         html, _ = write_study_report(a.out, a.name, frame, seeds=seeds, size_mm=size,

@@ -67,15 +67,13 @@ def _json(obj):
     return json.dumps(json_ready(obj), indent=1, allow_nan=False) + "\n"
 
 
-def read_rows(out, runs, *, retry_failed=False) -> dict:
+def read_rows(out, runs) -> dict:
     """``run_id -> row`` of the runs of ``runs`` finished in ``out`` (their ``row.json``)."""
     rows = {}
     for run in runs:
         path = pathlib.Path(out) / "runs" / run.run_id / "row.json"
         if path.exists():
-            row = json.loads(path.read_text(encoding="utf-8"))
-            if not (retry_failed and row.get("status") != "ok"):
-                rows[run.run_id] = row
+            rows[run.run_id] = json.loads(path.read_text(encoding="utf-8"))
     return rows
 
 
@@ -92,7 +90,8 @@ def results_frame(runs, rows):
             given.setdefault("test", run.config["test"])
             head = {"run_id": row["run_id"], "status": row["status"], "error": row["error"]}
             records.append({**head, **given, **row})
-    return pd.DataFrame.from_records(records)
+    return pd.DataFrame.from_records(records, columns=None if records else
+                                     ["run_id", "status", "error"])
 
 
 def write_results_table(out, frame) -> str:
@@ -174,10 +173,13 @@ def run_sweep(runs, out, *, sweep_text=None, name="sweep", workers=None, schedul
         shutil.rmtree(stale, ignore_errors=True)
     if sweep_text is not None:
         _write_atomic_text(out / "sweep.yaml", sweep_text)
-    rows = read_rows(out, runs, retry_failed=retry_failed)
-    todo = [r for r in runs if r.run_id not in rows]
-    report = SweepReport(out=str(out), runs=len(runs), done_before=len(rows))
-    report.failed = sum(1 for r in rows.values() if r.get("status") != "ok")
+    rows = read_rows(out, runs)
+    todo = [r for r in runs if r.run_id not in rows
+            or (retry_failed and rows[r.run_id].get("status") != "ok")]
+    report = SweepReport(out=str(out), runs=len(runs), done_before=len(runs) - len(todo))
+    report.failed = failed_before = sum(1 for k, r in rows.items() if r.get("status") != "ok"
+                                        and k not in {t.run_id for t in todo})
+    started = time.time()
 
     def table():
         report.parquet = write_results_table(out, results_frame(runs, rows))
@@ -187,7 +189,7 @@ def run_sweep(runs, out, *, sweep_text=None, name="sweep", workers=None, schedul
     executor = make_executor(workers=workers, scheduler=scheduler) if todo else None
     report.executor = "" if executor is None else executor.name
     by_id = {r.run_id: r for r in todo}
-    bar = tqdm(total=len(runs), initial=len(rows), unit="run", desc=name,
+    bar = tqdm(total=len(runs), initial=report.done_before, unit="run", desc=name,
                disable=not progress, dynamic_ncols=True)
     try:
         if executor is not None:
@@ -208,6 +210,12 @@ def run_sweep(runs, out, *, sweep_text=None, name="sweep", workers=None, schedul
     except KeyboardInterrupt:
         report.interrupted = True
         executor.abort()
+        rows = read_rows(out, runs)      # a run recorded just before Ctrl-C joins the table
+        new = [rows[r.run_id] for r in todo if r.run_id in rows
+               and (out / "runs" / r.run_id / "row.json").stat().st_mtime >= started]
+        report.computed = len(new)
+        report.failed = failed_before + sum(r["status"] != "ok" for r in new)
+        table()
     finally:
         bar.close()
         report.wall_s = time.perf_counter() - t0

@@ -150,6 +150,7 @@ def test_ctrl_c_midway_then_rerun_computes_only_what_is_missing(sweep_file, pool
     first = pd.read_csv(out / "results.csv")
     done = sorted(p.parent.name for p in (out / "runs").glob("*/row.json"))
     assert sorted(first["run_id"]) == done and 1 <= len(done) < 4       # consistent table
+    assert _report(out)["interrupted"] and _report(out)["computed"] == len(done)
     stamps = {d: (out / "runs" / d / "row.json").stat().st_mtime_ns for d in done}
     assert gbmsim(["sweep", str(sweep_file), "--out", str(out), "--workers", "1",
                    "--no-progress"]) == 0
@@ -189,3 +190,23 @@ def test_bad_sweep_file_exit_2_one_line_nothing_written(tmp_path, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "unknown option 'sead'" in err[0] and str(sweep) in err[0]
     assert not out.exists()
+
+
+def test_ctrl_c_between_a_recorded_run_and_the_table(sweep_file, tmp_path, monkeypatch):
+    """Ctrl-C after a run's folder is written but before the table is: the table still holds
+    it (and sweep.json counts it)."""
+    from gbmgen import sweep
+    from gbmgen.sweep_spec import load_sweep
+    _, runs = load_sweep(sweep_file)
+    real, calls = sweep.write_results_table, []
+
+    def interrupted_once(out, frame):
+        calls.append(len(frame))
+        if len(calls) == 2:               # the rewrite after the first finished run
+            raise KeyboardInterrupt
+        return real(out, frame)
+
+    monkeypatch.setattr(sweep, "write_results_table", interrupted_once)
+    rep = sweep.run_sweep(runs[:2], tmp_path / "out", workers=0, progress=False)
+    assert rep.interrupted and rep.exit_code == 130 and rep.computed == 1
+    assert pd.read_csv(tmp_path / "out" / "results.csv")["run_id"].tolist() == [runs[0].run_id]
