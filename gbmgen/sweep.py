@@ -106,8 +106,7 @@ def write_results_table(out, frame) -> str:
     except ImportError:
         return "not written: pyarrow is not installed (pip install 'rockkit[sweep]')"
     tmp = out / f"results.parquet.tmp{os.getpid()}"
-    frame.astype({c: "string" for c in frame.columns if frame[c].dtype == object}) \
-        .to_parquet(tmp, index=False)
+    frame.convert_dtypes(convert_integer=False).to_parquet(tmp, index=False)   # None kept apart
     os.replace(tmp, out / "results.parquet")
     return str(out / "results.parquet")
 
