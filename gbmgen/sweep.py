@@ -106,9 +106,21 @@ def write_results_table(out, frame) -> str:
     except ImportError:
         return "not written: pyarrow is not installed (pip install 'rockkit[sweep]')"
     tmp = out / f"results.parquet.tmp{os.getpid()}"
-    frame.convert_dtypes(convert_integer=False).to_parquet(tmp, index=False)   # None kept apart
+    _typed(frame).to_parquet(tmp, index=False)
     os.replace(tmp, out / "results.parquet")
     return str(out / "results.parquet")
+
+
+def _typed(frame):
+    """``frame`` with its object columns as nullable booleans or text (for Parquet)."""
+    out = frame.copy()
+    for c in out.columns:
+        if out[c].dtype == object:
+            v = out[c].dropna()
+            flags = len(v) and all(isinstance(x, bool) or type(x).__name__ == "bool_"
+                                   for x in v)
+            out[c] = out[c].astype("boolean" if flags else "string")
+    return out
 
 
 def _record(out, run, outcome):
