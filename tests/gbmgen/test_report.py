@@ -1,17 +1,20 @@
 """Reports: ``gbmgen run`` and a study write a self-contained report.html (opened here in Debian's
 headless chromium through Playwright: no console error, every image decoded, the tables there)
 and the same content as report.md."""
+import base64
 import doctest
 import pathlib
 import re
 import shutil
 import warnings
 
+import cv2
 import numpy as np
 import pandas as pd
 import pytest
 
 from gbmgen import report as report_module
+from gbmgen.report import MAX_WIDTH_PX
 from gbmgen.study_report import write_study_report
 
 SAMPLES = pathlib.Path(__file__).resolve().parents[2] / "sample_images"
@@ -72,7 +75,13 @@ def test_run_report_content(run_folder):
     for link in links:                         # report.md shows the figures from files
         assert (run_folder / link).is_file(), link
     # self-contained: every image inline, nothing fetched from anywhere
-    assert html.count('src="data:image/png;base64,') == len(links)
+    inline = re.findall(r'src="data:image/png;base64,([^"]+)"', html)
+    assert len(inline) == len(links)
+    for data, link in zip(inline, links):     # each figure whole (scaled to the page width)
+        img = cv2.imdecode(np.frombuffer(base64.b64decode(data), np.uint8), cv2.IMREAD_COLOR)
+        src = cv2.imread(str(run_folder / link), cv2.IMREAD_COLOR)
+        assert img is not None and img.shape[1] == min(src.shape[1], MAX_WIDTH_PX), link
+        assert abs(img.shape[0] / img.shape[1] - src.shape[0] / src.shape[1]) < 0.01, link
     assert not re.search(r'(src|href)="(?!data:)', html)
 
 
@@ -83,13 +92,17 @@ def _open(page, path):
     page.on("requestfailed", lambda r: errors.append(f"request failed: {r.url}"))
     page.goto(pathlib.Path(path).resolve().as_uri())
     page.wait_for_load_state("load")
-    images = page.evaluate("""() => Array.from(document.images).map(
-        i => [i.complete, i.naturalWidth, i.naturalHeight])""")
+    images = page.evaluate("""async () => Promise.all(Array.from(document.images).map(
+        i => i.decode().then(() => [true, i.naturalWidth, i.naturalHeight],
+                             () => [false, 0, 0])))""")
     tables = page.evaluate("() => document.querySelectorAll('table tbody tr').length")
     return errors, images, tables
 
 
-def test_reports_open_in_headless_chromium(run_folder, study_folder):
+@pytest.fixture(scope="module")
+def browser():
+    """Debian's headless chromium driven by Playwright (skipped, with the reason, without
+    either)."""
     try:
         from playwright.sync_api import Error, sync_playwright
     except ImportError:
@@ -99,18 +112,45 @@ def test_reports_open_in_headless_chromium(run_folder, study_folder):
                     "chromium)")
     with sync_playwright() as p:
         try:
-            browser = p.chromium.launch(executable_path=CHROMIUM, args=ARGS)
+            b = p.chromium.launch(executable_path=CHROMIUM, args=ARGS)
         except Error as exc:
             pytest.skip(f"chromium at {CHROMIUM} does not start: {str(exc).splitlines()[0]}")
         try:
-            for folder, n_images in ((run_folder, 5), (study_folder, 2)):
-                errors, images, rows = _open(browser.new_page(), folder / "report.html")
-                assert errors == [], errors
-                assert len(images) >= n_images
-                assert all(c and w > 0 and h > 0 for c, w, h in images), images
-                assert rows >= 3
+            yield b
         finally:
-            browser.close()
+            b.close()
+
+
+def _check(browser, path, n_images):
+    """The report's defects as the browser sees them (empty when it is sound)."""
+    errors, images, rows = _open(browser.new_page(), path)
+    bad = [f"image {k} not decoded" for k, (c, w, h) in enumerate(images)
+           if not (c and w > 0 and h > 0)]
+    if len(images) < n_images:
+        bad.append(f"{len(images)} images, expected >= {n_images}")
+    if rows < 3:
+        bad.append(f"{rows} table rows, expected >= 3")
+    return errors + bad
+
+
+def test_reports_open_in_headless_chromium(browser, run_folder, study_folder):
+    for folder, n_images in ((run_folder, 5), (study_folder, 2)):
+        assert _check(browser, folder / "report.html", n_images) == []
+
+
+def test_the_browser_check_sees_a_broken_report(browser, run_folder, tmp_path):
+    """The check above can fail: a report with an image that is not a PNG, a script error and
+    a fetched (missing) file is caught on all three counts."""
+    html = (run_folder / "report.html").read_text()
+    first = html.index('src="data:image/png;base64,') + len('src="data:image/png;base64,')
+    broken = html[:first] + "bm90IGEgUE5H" + html[html.index('"', first):]   # "not a PNG"
+    broken = broken.replace("</body>", '<img src="missing.png"><script>undefined_name();'
+                            "</script></body>")
+    (tmp_path / "report.html").write_text(broken)
+    problems = _check(browser, tmp_path / "report.html", 5)
+    assert any("undefined_name" in p for p in problems), problems
+    assert any(p.startswith("request failed") and "missing.png" in p for p in problems)
+    assert sum(p.endswith("not decoded") for p in problems) == 2, problems
 
 
 def test_study_report_findings(study_folder):
