@@ -66,6 +66,21 @@ def _extreme(s, key, metric, fn):
     return s.loc[getattr(s[f"{metric}_mean"], fn)(), key]
 
 
+def _spread_text(s, metric) -> str:
+    """How far the cases stand apart in seed sd, or why that is unknown.
+
+    >>> import pandas as pd
+    >>> _spread_text(pd.DataFrame({"u_mean": [1.0, 3.0], "u_sd": [1.0, 1.0]}), "u")
+    'case means span 2.0 seed sd'
+    >>> _spread_text(pd.DataFrame({"u_mean": [1.0, 3.0], "u_sd": [float("nan")] * 2}), "u")
+    'one seed per case: no seed spread, the order may be noise'
+    """
+    r = _rel_spread(s, metric)
+    if math.isnan(r):
+        return "one seed per case: no seed spread, the order may be noise"
+    return f"case means span {r:.1f} seed sd"
+
+
 def _rel_spread(s, metric):
     """(largest - smallest case mean) / mean seed sd: how far the cases stand apart."""
     m, sd = s[f"{metric}_mean"].dropna(), s[f"{metric}_sd"].dropna()
@@ -111,7 +126,7 @@ def findings(name, frame):
             fn = "idxmax" if word == "strongest" else "idxmin"
             at = _extreme(g, "slenderness", "ucs_mpa", fn)
             rows.append([f"{shape}: {word} at slenderness", f"{ratio:g}",
-                         f"{at:g} (case means span {_rel_spread(g, 'ucs_mpa'):.1f} seed sd)"
+                         f"{at:g} ({_spread_text(g, 'ucs_mpa')})"
                          if at is not None else "–",
                          None if at is None else bool(math.isclose(at, ratio))])
     elif name == "thesis-ch6-holes":
