@@ -238,7 +238,7 @@ def draw_figures(name, frame, folder) -> list:
     elif name == "thesis-ch6-double-holes":
         m = "hole_damage_damaged_area_mm2"
         f = frame.assign(bridge_r=frame["bridge_mm"] / (0.5 * frame["hole_diameter_mm"]))
-        fig, axes = plt.subplots(1, 2, figsize=(11, 4))
+        fig, axes = plt.subplots(1, 2, figsize=(11, 4.6))
         for ax, key, ref, xlabel in (
                 (axes[0], "bridge_r", THESIS_CH6_BRIDGE_R, "bridge length (hole radii R)"),
                 (axes[1], "bridge_angle_deg", THESIS_CH6_ANGLE, "bridge angle (deg)")):
@@ -254,7 +254,8 @@ def draw_figures(name, frame, folder) -> list:
             ax2.set_ylabel("damaged area, thesis (mm², its definition)", color="0.3")
             h1, l1 = ax.get_legend_handles_labels()
             h2, l2 = ax2.get_legend_handles_labels()
-            ax.legend(h1 + h2, l1 + l2, fontsize=7, loc="upper left")
+            ax.legend(h1 + h2, l1 + l2, fontsize=7, loc="upper center",   # below: no
+                      bbox_to_anchor=(0.5, -0.14), ncol=1)                # point hidden
         save(fig, f"{name}.png", "damaged area by bridge length and by bridge angle")
         fig, ax = plt.subplots(figsize=(6, 4))
         for b, g in f.groupby("bridge_r"):
