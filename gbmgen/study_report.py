@@ -135,6 +135,7 @@ def findings(name, frame):
             at = _extreme(s, "hole", m, fn)
             rows.append([f"{word} damaged area", kind, at or "–",
                          None if at is None else at == kind])
+        _flag_one_seed(rows, frame)
     elif name == "thesis-ch6-double-holes":
         m = "hole_damage_damaged_area_mm2"
         f = frame.assign(bridge_r=frame["bridge_mm"] / (0.5 * frame["hole_diameter_mm"]))
@@ -154,7 +155,17 @@ def findings(name, frame):
             rows.append([f"{word} damaged area at bridge angle (deg)", f"{th:g}",
                          "–" if at is None else f"{at:g}",
                          None if at is None else math.isclose(at, th)])
+        _flag_one_seed(rows, frame)
     return rows
+
+
+def _flag_one_seed(rows, frame):
+    """With one seed the order of the cases has no seed spread to stand against: say so."""
+    ok = frame[frame["status"] == "ok"] if "status" in frame else frame
+    if "seed" in ok and ok["seed"].nunique() == 1:
+        for r in rows:
+            if r[2] != "–":
+                r[2] = f"{r[2]} (one seed: no seed spread, the order may be noise)"
 
 
 def _errorbar(ax, x, s, metric, **kw):

@@ -77,6 +77,12 @@ def test_findings_read_the_extremes():
                                        (4, 1.0, 160, 80), (1, 1.5, 120, 61))]
     f = findings("thesis-ch4-scenarios", _frame(rows))
     assert [r[3] for r in f] == [True, False, False, True]
+    one_seed = _frame([{"hole": h, "seed": 1, "hole_damage_damaged_area_mm2": a}
+                       for h, a in (("intra", 3.0), ("inter", 1.0), ("trans3", 2.0))])
+    f = findings("thesis-ch6-holes", one_seed)
+    assert [r[2] for r in f] == ["intra (one seed: no seed spread, the order may be noise)",
+                                 "inter (one seed: no seed spread, the order may be noise)"]
+    assert [r[3] for r in f] == [True, True]
 
 
 def test_gbmsim_finds_the_subcommands_of_gbmgen():
