@@ -314,6 +314,7 @@ def _run(a):
                       porosity=a.porosity, seat_faces=a.seat_faces, bond_gap_mm=a.bond_gap_mm,
                       params=a.params, test=a.test, test_options={"post_peak": a.post_peak})
     print(json.dumps(summary, indent=1, default=str))
+    print(f"report: {os.path.join(a.out, 'report.html')} (and report.md)", file=sys.stderr)
     ts, ps = summary.get("test_summary") or {}, summary.get("P_sem") or {}
     if ts.get("P_sim") and ps.get("P_pooled") is not None:
         print(f"damage ratio P = A_T/A_S: SEM (pooled over loaded stages) {ps['P_pooled']:.2f}"

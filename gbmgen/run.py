@@ -11,7 +11,9 @@ The end-to-end job of DESIGN.md §1 in one call. Writes to ``out``:
   ``summary.json``, ``history.csv``, ``cracks.csv``, figures), skipped with ``test="none"``;
 * ``run.json`` — a summary (semkit tables used, specimen counts, MHI target/realised, the test's
   E / strength / crack counts, the SEM damage ratio P beside the simulated P_sim, seconds per
-  stage).
+  stage);
+* ``report.html`` (self-contained) and ``report.md`` with ``report_files/`` — the run in one
+  page (:mod:`gbmgen.run_report`).
 """
 from __future__ import annotations
 
@@ -121,7 +123,7 @@ def sem_damage(sem_dir):
 
 def run(images_dir="sample_images", out="gbmgen_run", *, minerals=DEFAULT_MINERALS,
         classes=None, pixel_size_um=None, cracks=True, jobs=None, progress=True,
-        seed=None, test="ucs", test_options=None, **build_options):
+        seed=None, test="ucs", test_options=None, report=True, **build_options):
     """Analyse a folder of SEM images with semkit and build a specimen from the measured table.
 
     Parameters
@@ -152,6 +154,8 @@ def run(images_dir="sample_images", out="gbmgen_run", *, minerals=DEFAULT_MINERA
         specimen.
     test_options : dict, optional
         Keywords of the test's protocol function (e.g. ``{"post_peak": 0.8}``).
+    report : bool
+        Also write ``report.html`` and ``report.md`` (:mod:`gbmgen.run_report`).
     **build_options
         Keywords of :func:`gbmgen.build.build_specimen` (scenario, width_mm, height_mm,
         model_scale, tessellation, particle_radius_mm, porosity, params, ...).
@@ -234,6 +238,9 @@ def run(images_dir="sample_images", out="gbmgen_run", *, minerals=DEFAULT_MINERA
     with open(tmp, "w", encoding="utf-8") as fh:
         json.dump(summary, fh, indent=1, default=_json_default)
     os.replace(tmp, out / "run.json")
+    if report:                                 # report.html (self-contained) and report.md
+        from .run_report import write_run_report
+        write_run_report(out)
     return summary
 
 

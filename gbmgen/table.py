@@ -22,7 +22,8 @@ from .errors import InputError
 __all__ = ["GrainSizeTable", "read_table", "example_table", "EXAMPLE_TABLES", "SCENARIOS"]
 
 #: Example tables shipped in ``gbmgen/presets`` (name -> YAML file).
-EXAMPLE_TABLES = {"table-4-1": "table_4_1.yaml"}
+EXAMPLE_TABLES = {"table-4-1": "table_4_1.yaml",
+                  "thesis-ch6-pyroxene": "thesis_ch6_pyroxene.yaml"}
 
 #: Scenario number -> description (REFERENCE.md Ch. 4, Table 4-2).
 SCENARIOS = {1: "full observed range", 2: "10-90 % passing", 3: "mean +- 1/2 mean",
@@ -320,7 +321,8 @@ def read_table(path) -> GrainSizeTable:
 
 
 def example_table(name="table-4-1") -> GrainSizeTable:
-    """A shipped example table: ``table-4-1`` is thesis Table 4-1 (SEM scale, um).
+    """A shipped example table: ``table-4-1`` is thesis Table 4-1 (SEM scale, um);
+    ``thesis-ch6-pyroxene`` the one-mineral, 4 mm-grain model of the thesis's defect chapter.
 
     The same rows are in ``gbmgen/presets/table_4_1.csv`` (a ``grains.csv`` to copy).
 

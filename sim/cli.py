@@ -110,7 +110,32 @@ def build_parser() -> argparse.ArgumentParser:
     register(sub)
     from .protocols.excavate_cli import register as register_excavate
     register_excavate(sub)
+    add_plugin_commands(sub)
     return p
+
+
+#: Entry-point group through which installed packages add ``gbmsim`` subcommands (gbmgen adds
+#: ``sweep`` and ``study``); each entry point is a function ``register(subparsers)``.
+PLUGIN_GROUP = "rockkit.gbmsim"
+
+
+def add_plugin_commands(sub) -> list:
+    """Add the subcommands of the :data:`PLUGIN_GROUP` entry points; returns their names.
+
+    ``sim`` imports nothing of the other packages: they register themselves in their package
+    metadata. A plugin that fails to load is reported in one stderr line and left out.
+    """
+    from importlib.metadata import entry_points
+    names = []
+    for ep in sorted(entry_points(group=PLUGIN_GROUP), key=lambda e: e.name):
+        try:
+            ep.load()(sub)
+        except Exception as exc:          # a broken plugin must not break gbmsim
+            print(f"gbmsim: warning: subcommand {ep.name!r} ({ep.value}) not loaded: "
+                  f"{type(exc).__name__}: {exc}", file=sys.stderr)
+            continue
+        names.append(ep.name)
+    return names
 
 
 def main(argv=None) -> int:

@@ -202,6 +202,9 @@ def plot_crack_map(specimen, cracks, path, *, x=None, y=None, magnify: float = 0
         ax.add_collection(EllipseCollection(d, d, 0.0, units="xy", offsets=np.c_[px, py],
                                             offset_transform=ax.transData, facecolors="0.9",
                                             edgecolors="0.7", linewidths=0.2))
+    from ..hole_damage import holes_in_meta  # holes cut after the grains were drawn
+    for cx, cy, rad in holes_in_meta(specimen.meta):
+        ax.add_patch(plt.Circle((cx, cy), rad, facecolor="white", edgecolor="k", lw=0.6))
     if cracks is not None and len(cracks):
         key = np.char.add(np.char.add(np.asarray(cracks["kind"]).astype(str), "_"),
                           np.asarray(cracks["mode"]).astype(str))

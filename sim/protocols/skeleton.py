@@ -14,6 +14,7 @@ import warnings
 from dataclasses import dataclass, field
 from typing import Callable, ClassVar
 
+from ..hole_damage import hole_damage_summary
 from . import resume as rs
 from .loop import LoadingLoop, StopRule, loop_steps, run_and_finish
 from .options import TestOptions
@@ -190,6 +191,7 @@ def run_loading(protocol: Protocol, specimen, opts: TestOptions) -> TestResult:
         if len(hist) > 2:
             summary.update(rig.summarize(hist, cracks))
         summary.update(crack_summary(cracks))
+        summary.update(hole_damage_summary(loaded, sim))   # Ch. 6 measures, holes only
         if rig.finish is not None:
             rig.finish(summary)
         res = TestResult(summary=summary, history=hist, cracks=cracks, sim=sim,
