@@ -136,8 +136,10 @@ def test_ctrl_c_midway_then_rerun_computes_only_what_is_missing(sweep_file, pool
     out = tmp_path / "out"
     cmd = [sys.executable, "-m", "sim", "sweep", str(sweep_file), "--out", str(out),
            "--workers", "1", "--no-progress"]
+    # SIG_DFL in the child: a shell that starts jobs in the background ignores SIGINT
     proc = subprocess.Popen(cmd, start_new_session=True, stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True)
+                            stderr=subprocess.PIPE, text=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     deadline = time.monotonic() + 300
     while time.monotonic() < deadline and proc.poll() is None:
         if len(list((out / "runs").glob("*/row.json"))) >= 1:

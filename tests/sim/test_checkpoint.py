@@ -127,9 +127,14 @@ def test_ctrl_c_during_the_compiled_loop_leaves_a_consistent_state(monkeypatch):
         return out
 
     monkeypatch.setattr(simulation, "run_steps", run_steps)
+    # a shell that starts jobs in the background ignores SIGINT: give Ctrl-C its Python default
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
     hit = make()
-    with pytest.raises(KeyboardInterrupt):
-        hit.cycle(5000)
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            hit.cycle(5000)
+    finally:
+        signal.signal(signal.SIGINT, previous)
     monkeypatch.setattr(simulation, "run_steps", orig)
     assert 0 < hit.step == sum(calls) < 5000           # the steps the kernel made, all counted
     ref = make()
