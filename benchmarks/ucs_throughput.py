@@ -98,10 +98,13 @@ def ucs_specimen(width_mm, height_mm, seed):
 
 def run_ucs_row(spec, max_strain):
     from sim.protocols.registry import run_test
+    c0 = time.process_time()
     s = run_test("ucs", spec, max_strain=max_strain, post_peak=None, progress=False,
                  figures=False).summary
+    cpu = time.process_time() - c0             # set-up and read-out included
     return {"particle_steps_per_s": s["particle_steps_per_s"], "steps": s["steps"],
-            "seconds": s["wall_s"], "particles": s["n_particles"]}
+            "seconds": s["wall_s"], "particles": s["n_particles"], "cpu_s": cpu,
+            "particle_steps_per_cpu_s": s["n_particles"] * s["steps"] / cpu}
 
 
 def run_engine_row(n, steps, seed=1):
@@ -110,11 +113,12 @@ def run_engine_row(n, steps, seed=1):
     s = Specimen.random_packing(n, seed=seed)
     sim = Simulation(s)
     sim.cycle(50)
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     sim.cycle(steps)
-    t = time.perf_counter() - t0
+    t, cpu = time.perf_counter() - t0, time.process_time() - c0
     return {"particle_steps_per_s": s.n_particles * steps / t, "steps": steps, "seconds": t,
-            "particles": s.n_particles}
+            "particles": s.n_particles, "cpu_s": cpu,
+            "particle_steps_per_cpu_s": s.n_particles * steps / cpu}
 
 
 def run_yade_row(n_target, threads, steps, folder):
@@ -155,7 +159,9 @@ def main(argv=None) -> int:
     ap.add_argument("--width-mm", type=float, default=10.0)
     ap.add_argument("--height-mm", type=float, default=20.0)
     ap.add_argument("--seed", type=int, default=1)
-    ap.add_argument("--bench-steps", type=int, default=2000)
+    ap.add_argument("--bench-steps", type=int, default=0,
+                    help="steps of the engine row (default: as many as the UCS row took, so "
+                         "that both sample the machine's load over the same time)")
     ap.add_argument("--yade-steps", type=int, default=2000)
     ap.add_argument("--no-yade", action="store_true", help="skip YADE even when installed")
     ap.add_argument("--out", default="benchmarks/ucs_results/throughput")
@@ -171,8 +177,12 @@ def main(argv=None) -> int:
     yade_note = None
     loads = [load_avg()]
     for k in range(a.repeat):
-        rows["ucs"].append(run_ucs_row(spec, a.max_strain))
-        rows["engine"].append(run_engine_row(n, a.bench_steps))
+        # alternate the order, so that a trend in the load favours neither
+        if k % 2 == 0:
+            rows["ucs"].append(run_ucs_row(spec, a.max_strain))
+        rows["engine"].append(run_engine_row(n, a.bench_steps or rows["ucs"][-1]["steps"]))
+        if k % 2 == 1:
+            rows["ucs"].append(run_ucs_row(spec, a.max_strain))
         if a.no_yade:
             yade_note = "skipped (--no-yade)"
         else:
@@ -192,6 +202,12 @@ def main(argv=None) -> int:
     out = {"particles": n, "threads": a.threads, "max_strain": a.max_strain,
            "median_particle_steps_per_s": med,
            "ucs_over_engine": med["ucs"] / med["engine"],
+           "ucs_over_engine_paired": float(np.median(
+               [u["particle_steps_per_s"] / e["particle_steps_per_s"]
+                for u, e in zip(rows["ucs"], rows["engine"])])),
+           "ucs_over_engine_cpu": float(
+               np.median([r["particle_steps_per_cpu_s"] for r in rows["ucs"]])
+               / np.median([r["particle_steps_per_cpu_s"] for r in rows["engine"]])),
            "ucs_over_yade": med["ucs"] / med["yade"] if med["yade"] else None,
            "yade": yade_note or f"yade {rows['yade'][0].get('version')}, "
                                 f"{rows['yade'][0]['particles']} spheres",
@@ -208,7 +224,9 @@ def main(argv=None) -> int:
                      f"{med['yade'] / 1e6:.2f} | UCS / YADE {out['ucs_over_yade']:.1f} |")
     else:
         lines.append(f"| YADE | — | — | {yade_note} |")
-    lines += ["", f"{a.threads} thread(s), median of {a.repeat} interleaved repeats; load average "
+    lines += ["", f"UCS / engine: median of the per-repeat ratios {out['ucs_over_engine_paired']:.2f}"
+              f", per CPU-second {out['ucs_over_engine_cpu']:.2f}.",
+              "", f"{a.threads} thread(s), median of {a.repeat} interleaved repeats; load average "
               f"before and after each repeat: {loads}"]
     with open(os.path.join(a.out, "ucs_throughput.md"), "w", encoding="utf-8") as f:
         f.write("\n".join(lines) + "\n")
