@@ -194,7 +194,8 @@ def main(argv=None) -> int:
                          "compiled step loop against the work between its calls")
     ap.add_argument("--out", default="benchmarks/ucs_results/throughput")
     a = ap.parse_args(argv)
-    import numba
+    import sim                             # noqa: F401  (before numba starts its threads:
+    import numba                           # sim picks the OpenMP threading layer)
     numba.set_num_threads(a.threads)
     os.makedirs(a.out, exist_ok=True)
     spec = ucs_specimen(a.width_mm, a.height_mm, a.seed)
@@ -232,7 +233,8 @@ def main(argv=None) -> int:
                  if rows["yade"] else "") + f" particle-steps/s; load {loads[-1]}", flush=True)
     med = {k: float(np.median([r["particle_steps_per_s"] for r in v])) if v else None
            for k, v in rows.items()}
-    out = {"particles": n, "threads": a.threads, "max_strain": a.max_strain,
+    out = {"particles": n, "threads": a.threads, "threading_layer": numba.threading_layer(),
+           "max_strain": a.max_strain,
            "median_particle_steps_per_s": med,
            "ucs_over_engine": med["ucs"] / med["engine"],
            "ucs_over_engine_paired": float(np.median(
@@ -258,8 +260,10 @@ def main(argv=None) -> int:
     else:
         lines.append(f"| YADE | — | — | {yade_note} |")
     lines += ["", "UCS / engine: median of the per-repeat ratios "
-              f"{out['ucs_over_engine_paired']:.2f}, per CPU-second {out['ucs_over_engine_cpu']:.2f}.",
-              "", f"{a.threads} thread(s), median of {a.repeat} interleaved repeats; load average "
+              f"{out['ucs_over_engine_paired']:.2f}, per CPU-second "
+              f"{out['ucs_over_engine_cpu']:.2f}.",
+              "", f"{a.threads} thread(s) ({out['threading_layer']}), median of {a.repeat} "
+              "interleaved repeats; load average "
               f"before and after each repeat: {loads}"]
     with open(os.path.join(a.out, "ucs_throughput.md"), "w", encoding="utf-8") as f:
         f.write("\n".join(lines) + "\n")
