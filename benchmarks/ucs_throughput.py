@@ -7,17 +7,22 @@ One run measures, interleaved (so that a shared machine's load falls on all of t
   (0.001); particle-steps/s over the loading loop (``summary["particle_steps_per_s"]``:
   recording, analysis, adaptive speed and neighbour rebuilds included);
 - **engine**: what ``gbmsim bench --n N`` measures, at the UCS specimen's particle count:
-  ``Simulation(Specimen.random_packing(N))`` cycled in calls of ``--bench-steps`` steps;
+  ``Simulation(Specimen.random_packing(N))`` cycled ``--bench-steps`` steps in one call (by
+  default as many steps as the UCS row took, so that both rows sample the load over about the
+  same time); the order of the two rows alternates between repeats;
 - **YADE** (when the ``yade`` command exists, e.g. Debian's ``apt-get install yade``): a UCS
   of a bonded JCFpm sphere packing of about the same particle count between two moving
   platens, ``yade -j THREADS``; the script is written by this benchmark into the output
   folder (``yade_ucs.py``) and times ``O.run`` after a warm-up. Without YADE the row says so.
 
-Prints and writes (``--out``) the medians, the ratios UCS / engine and UCS / YADE, the thread
-count and the machine load; JSON and a markdown table::
+Prints and writes (``--out``) the medians, the ratios UCS / engine (of the medians, the median
+of the per-repeat ratios, and per CPU-second, which a shared machine's load disturbs least) and
+UCS / YADE, the thread count and the machine load; JSON and a markdown table. ``--profile``
+first runs one UCS row under cProfile and reports the share of its loop spent in the compiled
+step loop against the Python work between the calls::
 
     python benchmarks/ucs_throughput.py [--threads 2] [--repeat 3] [--max-strain 0.001]
-        [--out benchmarks/ucs_results/throughput]
+        [--profile] [--out benchmarks/ucs_results/throughput]
 """
 from __future__ import annotations
 
@@ -98,10 +103,33 @@ def ucs_specimen(width_mm, height_mm, seed):
 
 def run_ucs_row(spec, max_strain):
     from sim.protocols.registry import run_test
+    c0 = time.process_time()
     s = run_test("ucs", spec, max_strain=max_strain, post_peak=None, progress=False,
                  figures=False).summary
+    cpu = time.process_time() - c0             # set-up and read-out included
     return {"particle_steps_per_s": s["particle_steps_per_s"], "steps": s["steps"],
-            "seconds": s["wall_s"], "particles": s["n_particles"]}
+            "seconds": s["wall_s"], "particles": s["n_particles"], "cpu_s": cpu,
+            "particle_steps_per_cpu_s": s["n_particles"] * s["steps"] / cpu}
+
+
+def profile_ucs_row(spec, max_strain):
+    """One UCS row under cProfile: the share of the loading loop spent in the compiled step
+    loop (``sim.integrate.run_steps``) and the Python work between its calls (records, the
+    adaptive speed, the stop rule, crack harvesting, neighbour rebuilds), s."""
+    import cProfile
+    import pstats
+    from sim.protocols.registry import run_test
+    prof = cProfile.Profile()
+    prof.enable()
+    s = run_test("ucs", spec, max_strain=max_strain, post_peak=None, progress=False,
+                 figures=False).summary
+    prof.disable()
+    stats = pstats.Stats(prof).stats
+    kernel = sum(v[2] for k, v in stats.items() if k[2] == "run_steps")
+    calls = sum(v[1] for k, v in stats.items() if k[2] == "run_steps")
+    return {"loop_s": s["wall_s"], "kernel_s": kernel, "kernel_calls": calls,
+            "between_s": s["wall_s"] - kernel, "kernel_share": kernel / s["wall_s"],
+            "steps": s["steps"]}
 
 
 def run_engine_row(n, steps, seed=1):
@@ -110,11 +138,12 @@ def run_engine_row(n, steps, seed=1):
     s = Specimen.random_packing(n, seed=seed)
     sim = Simulation(s)
     sim.cycle(50)
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     sim.cycle(steps)
-    t = time.perf_counter() - t0
+    t, cpu = time.perf_counter() - t0, time.process_time() - c0
     return {"particle_steps_per_s": s.n_particles * steps / t, "steps": steps, "seconds": t,
-            "particles": s.n_particles}
+            "particles": s.n_particles, "cpu_s": cpu,
+            "particle_steps_per_cpu_s": s.n_particles * steps / cpu}
 
 
 def run_yade_row(n_target, threads, steps, folder):
@@ -155,24 +184,39 @@ def main(argv=None) -> int:
     ap.add_argument("--width-mm", type=float, default=10.0)
     ap.add_argument("--height-mm", type=float, default=20.0)
     ap.add_argument("--seed", type=int, default=1)
-    ap.add_argument("--bench-steps", type=int, default=2000)
+    ap.add_argument("--bench-steps", type=int, default=0,
+                    help="steps of the engine row (default: as many as the UCS row took, so "
+                         "that both sample the machine's load over the same time)")
     ap.add_argument("--yade-steps", type=int, default=2000)
     ap.add_argument("--no-yade", action="store_true", help="skip YADE even when installed")
+    ap.add_argument("--profile", action="store_true",
+                    help="first run one UCS row under cProfile and report the time in the "
+                         "compiled step loop against the work between its calls")
     ap.add_argument("--out", default="benchmarks/ucs_results/throughput")
     a = ap.parse_args(argv)
-    import numba
+    import sim                             # noqa: F401  (before numba starts its threads:
+    import numba                           # sim picks the OpenMP threading layer)
     numba.set_num_threads(a.threads)
     os.makedirs(a.out, exist_ok=True)
     spec = ucs_specimen(a.width_mm, a.height_mm, a.seed)
     n = spec.n_particles
     run_ucs_row(spec, 2e-4)                 # compile (cached) before timing
     run_engine_row(n, 100)
+    prof = profile_ucs_row(spec, a.max_strain) if a.profile else None
+    if prof:
+        print(f"profile: {100 * prof['kernel_share']:.2f} % of the UCS loop in the compiled "
+              f"step loop ({prof['kernel_calls']} calls), {prof['between_s']:.2f} s between "
+              f"them of {prof['loop_s']:.1f} s", flush=True)
     rows = {"ucs": [], "engine": [], "yade": []}
     yade_note = None
     loads = [load_avg()]
     for k in range(a.repeat):
-        rows["ucs"].append(run_ucs_row(spec, a.max_strain))
-        rows["engine"].append(run_engine_row(n, a.bench_steps))
+        # alternate the order, so that a trend in the load favours neither
+        if k % 2 == 0:
+            rows["ucs"].append(run_ucs_row(spec, a.max_strain))
+        rows["engine"].append(run_engine_row(n, a.bench_steps or rows["ucs"][-1]["steps"]))
+        if k % 2 == 1:
+            rows["ucs"].append(run_ucs_row(spec, a.max_strain))
         if a.no_yade:
             yade_note = "skipped (--no-yade)"
         else:
@@ -189,13 +233,20 @@ def main(argv=None) -> int:
                  if rows["yade"] else "") + f" particle-steps/s; load {loads[-1]}", flush=True)
     med = {k: float(np.median([r["particle_steps_per_s"] for r in v])) if v else None
            for k, v in rows.items()}
-    out = {"particles": n, "threads": a.threads, "max_strain": a.max_strain,
+    out = {"particles": n, "threads": a.threads, "threading_layer": numba.threading_layer(),
+           "max_strain": a.max_strain,
            "median_particle_steps_per_s": med,
            "ucs_over_engine": med["ucs"] / med["engine"],
+           "ucs_over_engine_paired": float(np.median(
+               [u["particle_steps_per_s"] / e["particle_steps_per_s"]
+                for u, e in zip(rows["ucs"], rows["engine"])])),
+           "ucs_over_engine_cpu": float(
+               np.median([r["particle_steps_per_cpu_s"] for r in rows["ucs"]])
+               / np.median([r["particle_steps_per_cpu_s"] for r in rows["engine"]])),
            "ucs_over_yade": med["ucs"] / med["yade"] if med["yade"] else None,
            "yade": yade_note or f"yade {rows['yade'][0].get('version')}, "
                                 f"{rows['yade'][0]['particles']} spheres",
-           "rows": rows, "load_avg": loads, "machine": platform.platform(),
+           "profile": prof, "rows": rows, "load_avg": loads, "machine": platform.platform(),
            "command": "python benchmarks/ucs_throughput.py " + " ".join(sys.argv[1:])}
     with open(os.path.join(a.out, "ucs_throughput.json"), "w", encoding="utf-8") as f:
         json.dump(out, f, indent=1)
@@ -208,7 +259,11 @@ def main(argv=None) -> int:
                      f"{med['yade'] / 1e6:.2f} | UCS / YADE {out['ucs_over_yade']:.1f} |")
     else:
         lines.append(f"| YADE | — | — | {yade_note} |")
-    lines += ["", f"{a.threads} thread(s), median of {a.repeat} interleaved repeats; load average "
+    lines += ["", "UCS / engine: median of the per-repeat ratios "
+              f"{out['ucs_over_engine_paired']:.2f}, per CPU-second "
+              f"{out['ucs_over_engine_cpu']:.2f}.",
+              "", f"{a.threads} thread(s) ({out['threading_layer']}), median of {a.repeat} "
+              "interleaved repeats; load average "
               f"before and after each repeat: {loads}"]
     with open(os.path.join(a.out, "ucs_throughput.md"), "w", encoding="utf-8") as f:
         f.write("\n".join(lines) + "\n")

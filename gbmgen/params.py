@@ -63,7 +63,8 @@ def bond_like_joint_stiffness(pb_emod, r_mean):
     return kn, kn / 2.0
 
 #: Named presets shipped as package data.
-PRESETS = ("thesis-ch4", "thesis-ch5", "thesis-ch4-calibrated", "thesis-ch7")
+PRESETS = ("thesis-ch4", "thesis-ch5", "thesis-ch4-calibrated", "thesis-ch4-calibrated-25x50",
+           "thesis-ch7")
 
 
 @dataclass(frozen=True)
