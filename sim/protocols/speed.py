@@ -122,8 +122,8 @@ class AdaptiveSpeed:
     - the factor falls to f* at once and rises by at most ``rise`` per record;
     - from the first crack on, f = 1 to the end of the test: the cracking, the approach to the
       peak, the peak and the post-peak run at the constant base speed, so the window where E
-      and ν are read (40-60 % of the peak; cracks start below it in rock) is at a steady speed
-      (:mod:`sim.protocols.elastic`). ``f_peak`` < 1 (an option, off by default) slows the
+      and ν are read (10-60 % of the peak while few cracks have formed; cracks start early in
+      rock) is at a steady speed (:mod:`sim.protocols.elastic`). ``f_peak`` < 1 (an option, off by default) slows the
       platens further near the peak (``T`` < ``tan_peak``) and after it.
 
     Attributes
