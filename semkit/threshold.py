@@ -157,7 +157,7 @@ def dark_class_levels(image) -> DarkLevels:
     """
     import cv2
     from scipy.ndimage import gaussian_filter1d
-    from scipy.signal import find_peaks
+    from .peaks import prominent_peaks
     a = np.asarray(image, np.float32)
     step = max(int(np.ceil(np.sqrt(a.size / 300_000))), 1)
     sub = np.ascontiguousarray(a[::step, ::step])
@@ -169,7 +169,7 @@ def dark_class_levels(image) -> DarkLevels:
     closed = cv2.morphologyEx(sub, cv2.MORPH_CLOSE, np.ones((ksz, ksz), np.uint8))
     hc, c = _hist(closed.ravel(), lo, hi)
     hcs = gaussian_filter1d(hc, 2.0)
-    peaks, _ = find_peaks(np.r_[0.0, hcs, 0.0], prominence=0.01 * hcs.max())
+    peaks = prominent_peaks(np.r_[0.0, hcs, 0.0], 0.01 * hcs.max())
     peaks = peaks - 1
     if peaks.size == 0:
         peaks = np.array([int(np.argmax(hcs))])
