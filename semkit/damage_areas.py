@@ -154,7 +154,6 @@ def typed_areas(image, crack_labels, type_image=None, *, core=None, band_px=PV_B
     cols = ["crack_id", "area_pv_px", "area_T_px", "area_S_px", "area_M_px"]
     if n == 0:
         return pd.DataFrame(columns=cols)
-    obj = lab > 0
     # sums over the band pixels only: f is 0 elsewhere, so the sums are the same
     idx, f, owner = _band_darkness(img, lab, core=core, band_px=band_px,
                                    background_sigma_px=background_sigma_px,
@@ -172,6 +171,8 @@ def typed_areas(image, crack_labels, type_image=None, *, core=None, band_px=PV_B
         for k, name in ((1, "area_T_px"), (2, "area_S_px"), (3, "area_M_px")):
             out[name] = np.bincount(owner, np.where(types == k, f, 0.0), minlength=n + 1)[1:]
     t = pd.DataFrame(out)
+    # every object pixel is a band pixel that owns itself, and owners are objects: the labels
+    # present are the owners
     present = np.zeros(n + 1, bool)
-    present[lab[obj]] = True
+    present[owner] = True
     return t[present[1:]].reset_index(drop=True)

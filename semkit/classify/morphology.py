@@ -93,16 +93,19 @@ def crack_groups(crack_labels, *, link_px=LINK_PX, small_px=SMALL_OBJECT_PX):
     area = np.bincount(lab.ravel(), minlength=n + 1)
     big = area >= small_px
     big[0] = False
-    big_mask = big[lab]
     small = (~big) & (area > 0)
     small[0] = False
-    if not big_mask.any() or not small.any():
+    if not big.any() or not small.any():
         return group_of
-    dist, near = cv2.distanceTransformWithLabels((~big_mask).astype(np.uint8), cv2.DIST_L2, 5,
+    kind = big.astype(np.uint8)     # per label: 0 background, 1 large, 2 small
+    kind[small] = 2
+    kind_img = kind[lab]
+    big_mask = kind_img == 1
+    dist, near = cv2.distanceTransformWithLabels((~big_mask).view(np.uint8), cv2.DIST_L2, 5,
                                                  labelType=cv2.DIST_LABEL_PIXEL)
     src = np.zeros(int(near.max()) + 1, np.int64)
     src[near[big_mask]] = lab[big_mask]
-    sel = small[lab]
+    sel = kind_img == 2
     ids, d, tgt = lab[sel], dist[sel], src[near[sel]]
     order = np.lexsort((d, ids))
     first = order[np.r_[True, ids[order][1:] != ids[order][:-1]]]
@@ -166,10 +169,11 @@ def crack_morphology(crack_labels, *, image=None, skeleton=None, background=None
     mask = lab > 0
     skel = skeletonize(mask) if skeleton is None else (np.asarray(skeleton, bool) & mask)
     group_of = crack_groups(lab, link_px=link_px)
-    grp = group_of[lab]
     rr, cc = np.nonzero(skel)
-    g = grp[rr, cc]
-    dist = cv2.distanceTransform(mask.astype(np.uint8), cv2.DIST_L2, cv2.DIST_MASK_5)
+    g = group_of[lab[rr, cc]]
+    mask8 = mask.view(np.uint8)
+    at = np.flatnonzero(mask)        # the mask pixels, raster order
+    dist = cv2.distanceTransform(mask8, cv2.DIST_L2, cv2.DIST_MASK_5)
     ap = np.maximum(2.0 * dist[rr, cc] - 1.0, 1.0).astype(np.float64)
     ap_img = np.zeros(lab.shape, np.float64)
     ap_img[rr, cc] = ap
@@ -181,15 +185,15 @@ def crack_morphology(crack_labels, *, image=None, skeleton=None, background=None
             background = cv2.morphologyEx(grey, cv2.MORPH_CLOSE, k)
         core = float(crack_level) if crack_level is not None and np.isfinite(crack_level) \
             else float(np.percentile(grey[mask], 2))
-        bg = np.asarray(background, np.float32)[mask]
-        dark[mask] = np.clip((bg - grey[mask]) / np.maximum(bg - core, 1e-6), 0, 1)
+        bg = np.asarray(background, np.float32).ravel()[at]
+        dark.ravel()[at] = np.clip((bg - grey.ravel()[at]) / np.maximum(bg - core, 1e-6), 0, 1)
     sk8 = skel.astype(np.uint8)
     nb = cv2.filter2D(sk8, cv2.CV_16S, np.ones((3, 3), np.float32),
                       borderType=cv2.BORDER_CONSTANT) - sk8
     ends = (skel & (nb <= 1)).astype(np.uint8)
     w = int(window_px)
     win = np.empty((rr.size, 11))
-    skeleton_window_sums(sk8, ap_img, mask.astype(np.uint8), ends, dark, rr.astype(np.int64),
+    skeleton_window_sums(sk8, ap_img, mask8, ends, dark, rr.astype(np.int64),
                          cc.astype(np.int64), w // 2, win)
     s0, sx, sy, sxx, syy, sxy, sa, saa, sm, se, sd = win.T
     mx, my = sx / s0, sy / s0
@@ -227,8 +231,8 @@ def crack_morphology(crack_labels, *, image=None, skeleton=None, background=None
     F[:, 10] = gmean((ap >= WIDE_PX).astype(float))
     F[:, 11] = np.log(np.maximum(cnt, 1))
     if image is not None:
-        gm = grp[mask]
-        F[:, 8] = np.bincount(gm, weights=dark[mask], minlength=m) / np.maximum(
+        gm = group_of[lab.ravel()[at]]
+        F[:, 8] = np.bincount(gm, weights=dark.ravel()[at], minlength=m) / np.maximum(
             np.bincount(gm, minlength=m), 1)
     F[cnt == 0] = np.nan
     return group_of, F, dict(rr=rr, cc=cc, group=g, X=L)
