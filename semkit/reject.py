@@ -100,6 +100,42 @@ def _grow(labels, width):
     return cv2.dilate(a, k)
 
 
+def _max_label_3x3(labels, at):
+    """Largest label in the 3 x 3 box around each pixel of the flat indices ``at`` (the grey
+    dilation of the labels, read at those pixels only)."""
+    h, w = labels.shape
+    r, c = np.divmod(at, w)
+    out = np.zeros(at.size, np.int64)
+    for di in (-1, 0, 1):
+        rr = np.clip(r + di, 0, h - 1)
+        okr = (r + di >= 0) & (r + di < h)
+        for dj in (-1, 0, 1):
+            cc = np.clip(c + dj, 0, w - 1)
+            ok = okr & (c + dj >= 0) & (c + dj < w)
+            np.maximum(out, np.where(ok, labels[rr, cc], 0), out=out)
+    return out
+
+
+def _window_counts(ri, ci, qr, qc, w):
+    """How many points ``(ri, ci)`` lie in the w x w box centred on each query ``(qr, qc)``,
+    as float32 (what an unnormalised box filter of the point counts reads there)."""
+    half = w // 2
+    out = np.zeros(qr.size, np.float32)
+    if ri.size == 0 or qr.size == 0:
+        return out
+    order = np.argsort(ri, kind="stable")
+    rs, cs = ri[order], ci[order]
+    lo = np.searchsorted(rs, qr - half, side="left")
+    cnt = np.searchsorted(rs, qr - half + w - 1, side="right") - lo
+    q = np.repeat(np.arange(qr.size), cnt)         # (query, point) pairs in the row band
+    start = np.cumsum(cnt) - cnt
+    pos = np.arange(q.size) - start[q] + lo[q]
+    c = cs[pos]
+    inside = (c >= qc[q] - half) & (c <= qc[q] - half + w - 1)
+    out[:] = np.bincount(q, weights=inside, minlength=qr.size)
+    return out
+
+
 def _ring(labels, width=2):
     """``(ring_mask, label_of_ring_pixel)``: pixels within ``width`` of an object, outside all."""
     grown = _grow(labels, width)
@@ -176,22 +212,21 @@ def object_evidence(labels, n, grey, *, crack_level, noise, skeleton=None, regio
     hole_grey = np.full(n + 1, np.nan)
     if holes.any():
         nh, hl = cv2.connectedComponents(holes.view(np.uint8), connectivity=4)
+        at = np.flatnonzero(holes)
+        hole_of = hl.ravel()[at]
         owner = np.zeros(nh, np.int64)
-        np.maximum.at(owner, hl[holes], _grow(lab, 1)[holes].astype(np.int64))
-        encloses = np.bincount(owner[1:], weights=np.bincount(hl[holes], minlength=nh)[1:],
+        np.maximum.at(owner, hole_of, _max_label_3x3(lab, at))
+        encloses = np.bincount(owner[1:], weights=np.bincount(hole_of, minlength=nh)[1:],
                                minlength=n + 1)[:n + 1]
-        hole_grey = _label_percentiles(g[holes], owner[hl[holes]], n, (50.0,))[0][0]
+        hole_grey = _label_percentiles(g.ravel()[at], owner[hole_of], n, (50.0,))[0][0]
     hole_lift = (hole_grey - ring_lo) / np.maximum(ring_lo - float(crack_level), 1e-3)
     # other objects (>= 5 px) whose centre lies in the window around this one's centre
-    counts = np.zeros(lab.shape, np.float32)
     big = np.flatnonzero(area[1:] >= 5) + 1
     ri = np.clip(np.rint(cy[big]).astype(int), 0, lab.shape[0] - 1)
     ci = np.clip(np.rint(cx[big]).astype(int), 0, lab.shape[1] - 1)
-    np.add.at(counts, (ri, ci), 1.0)
-    w = config.ZONE_NEIGHBOUR_WINDOW_PX
-    counts = cv2.boxFilter(counts, -1, (w, w), normalize=False, borderType=cv2.BORDER_CONSTANT)
-    neighbours = counts[np.clip(np.rint(cy).astype(int), 0, lab.shape[0] - 1),
-                        np.clip(np.rint(cx).astype(int), 0, lab.shape[1] - 1)] - (area >= 5)
+    neighbours = _window_counts(ri, ci, np.clip(np.rint(cy).astype(int), 0, lab.shape[0] - 1),
+                                np.clip(np.rint(cx).astype(int), 0, lab.shape[1] - 1),
+                                config.ZONE_NEIGHBOUR_WINDOW_PX) - (area >= 5)
     texture = ring_sd / max(float(noise), 1e-6)
     ev = pd.DataFrame(dict(area_px=area, side_depth=side_depth, encloses_px=encloses,
                            hole_lift=hole_lift,

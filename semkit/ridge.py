@@ -139,7 +139,7 @@ def ridge_mask(image, *, crack_level, region=None, sigmas=config.RIDGE_SIGMAS_PX
     keep = np.zeros(n, bool)
     keep[lab[seed]] = True
     keep[0] = False
-    return keep[lab], depth.astype(np.float32)
+    return keep[lab], depth.astype(np.float32, copy=False)
 
 
 def add_ridge_lines(detect, area, ridge, depth):
