@@ -100,22 +100,6 @@ def _grow(labels, width):
     return cv2.dilate(a, k)
 
 
-def _max_label_3x3(labels, at):
-    """Largest label in the 3 x 3 box around each pixel of the flat indices ``at`` (the grey
-    dilation of the labels, read at those pixels only)."""
-    h, w = labels.shape
-    r, c = np.divmod(at, w)
-    out = np.zeros(at.size, np.int64)
-    for di in (-1, 0, 1):
-        rr = np.clip(r + di, 0, h - 1)
-        okr = (r + di >= 0) & (r + di < h)
-        for dj in (-1, 0, 1):
-            cc = np.clip(c + dj, 0, w - 1)
-            ok = okr & (c + dj >= 0) & (c + dj < w)
-            np.maximum(out, np.where(ok, labels[rr, cc], 0), out=out)
-    return out
-
-
 def _window_counts(ri, ci, qr, qc, w):
     """How many points ``(ri, ci)`` lie in the w x w box centred on each query ``(qr, qc)``,
     as float32 (what an unnormalised box filter of the point counts reads there)."""
@@ -215,7 +199,7 @@ def object_evidence(labels, n, grey, *, crack_level, noise, skeleton=None, regio
         at = np.flatnonzero(holes)
         hole_of = hl.ravel()[at]
         owner = np.zeros(nh, np.int64)
-        np.maximum.at(owner, hole_of, _max_label_3x3(lab, at))
+        np.maximum.at(owner, hole_of, _grow(lab, 1).ravel()[at].astype(np.int64))
         encloses = np.bincount(owner[1:], weights=np.bincount(hole_of, minlength=nh)[1:],
                                minlength=n + 1)[:n + 1]
         hole_grey = _label_percentiles(g.ravel()[at], owner[hole_of], n, (50.0,))[0][0]

@@ -86,7 +86,7 @@ def ridge_response(image, *, sigmas=config.RIDGE_SIGMAS_PX, kappa=config.RIDGE_E
         else:
             dxx, dyy = _add_scale(a, s, kappa, out)
             if noise is None:
-                v = (s * s * (dxx + dyy))[::2, ::2].ravel()
+                v = (s * s * (dxx[::2, ::2] + dyy[::2, ::2])).ravel()
                 noise = float(1.4826 * np.median(np.abs(v - np.median(v))))
     if out_small is not None:
         np.maximum(out, cv2.resize(out_small, (w, h), interpolation=cv2.INTER_LINEAR), out=out)
