@@ -18,6 +18,12 @@ def njit(fn):
     return numba.njit(**_OPTS)(fn)
 
 
+def njit_exact(fn):
+    """``numba.njit`` without fastmath: every float operation rounds as NumPy's does, so a
+    kernel that fuses NumPy array expressions gives the same bits."""
+    return numba.njit(cache=True, nogil=True, error_model="numpy")(fn)
+
+
 @njit
 def polyline_excess(xs, ys, ws, ox, oy, out):
     """Distance excess of each pixel over a polyline of varying width, written in place.
@@ -455,6 +461,41 @@ def ridge_strength(dxx, dyy, dxy, gx, gy, s2, ks, out):
                                                                + gy[i, j] * gy[i, j])
             if r > out[i, j]:
                 out[i, j] = r
+
+
+@njit_exact
+def ridge_levels(a, bg, r, crack_level, noise, high_snr, low_snr, min_depth, low_depth, region,
+                 depth, seed, low):
+    """Depth below the background and the hysteresis masks of :func:`semkit.ridge.ridge_mask`,
+    in one pass (float32 throughout, as the NumPy expressions it replaces).
+
+    Parameters
+    ----------
+    a, bg, r : (M, N) float32
+        Image, local background and ridge response.
+    crack_level, noise, high_snr, low_snr, min_depth, low_depth : float32
+    region : (M, N) bool
+        Sample region (all True for none).
+    depth : (M, N) float32
+        Receives ``(bg - a) / max(bg - crack_level, 1e-3)``.
+    seed, low : (M, N) bool
+        Receive ``r / noise > high_snr and depth > min_depth`` and
+        ``r / noise > low_snr and depth > low_depth``, inside the region.
+    """
+    h, w = a.shape
+    eps = np.float32(1e-3)
+    for i in range(h):
+        for j in range(w):
+            b = bg[i, j]
+            c = b - crack_level
+            if not c >= eps:    # np.maximum(c, 1e-3) (c is finite)
+                c = eps
+            d = (b - a[i, j]) / c
+            depth[i, j] = d
+            snr = r[i, j] / noise
+            inside = region[i, j]
+            seed[i, j] = inside and snr > high_snr and d > min_depth
+            low[i, j] = inside and snr > low_snr and d > low_depth
 
 
 @njit

@@ -310,7 +310,9 @@ class CrackAnalysis:
         """Labels of cracks only (pores set to 0); ids match ``cracks.crack_id``."""
         keep = np.zeros(self.n_objects + 1, bool)
         keep[self.cracks["crack_id"].to_numpy()] = True
-        return np.where(keep[self.labels], self.labels, 0).astype(np.int32)
+        if keep[1:].all():
+            return self.labels
+        return np.where(keep[self.labels], self.labels, 0).astype(np.int32, copy=False)
 
     # stage 8: grains
     @functools.cached_property

@@ -101,10 +101,8 @@ def crack_table(labels, n, *, pixel_size_um, skeleton=None, area_mask=None, imag
     """
     area_all, cx, cy, mxx, myy, mxy, _, _ = object_moments(labels, n)
     if area_mask is not None:
-        from . import _kernels
-        m = np.zeros((n + 1, 8), np.float64)
-        _kernels.label_moments(np.where(area_mask, labels, 0).astype(np.int32), n + 1, m)
-        area_px = m[:, 0]
+        area_px = np.bincount(np.asarray(labels)[np.asarray(area_mask, bool)],
+                              minlength=n + 1).astype(np.float64)
     else:
         area_px = area_all
     px = float(pixel_size_um)

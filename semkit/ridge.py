@@ -123,18 +123,20 @@ def ridge_mask(image, *, crack_level, region=None, sigmas=config.RIDGE_SIGMAS_PX
         Depth below the local background as a share of the local contrast.
     """
     import cv2
+
+    from . import _kernels
     a = np.ascontiguousarray(image, np.float32)
     r, noise = ridge_response(a, sigmas=sigmas)
     bg = cv2.morphologyEx(a, cv2.MORPH_CLOSE, cv2.getStructuringElement(
         cv2.MORPH_ELLIPSE, (closing_px, closing_px)))
     bg = cv2.GaussianBlur(bg, (0, 0), 1.0)
-    depth = (bg - a) / np.maximum(bg - float(crack_level), 1e-3)
-    snr = r / noise
-    seed = (snr > high_snr) & (depth > min_depth)
-    low = (snr > low_snr) & (depth > 0.5 * min_depth)
-    if region is not None:
-        seed &= region
-        low &= region
+    depth = np.empty(a.shape, np.float32)
+    seed = np.empty(a.shape, bool)
+    low = np.empty(a.shape, bool)
+    reg = np.ones(a.shape, bool) if region is None else np.ascontiguousarray(region, bool)
+    f32 = np.float32
+    _kernels.ridge_levels(a, bg, r, f32(crack_level), f32(noise), f32(high_snr), f32(low_snr),
+                          f32(min_depth), f32(0.5 * min_depth), reg, depth, seed, low)
     n, lab = cv2.connectedComponents(low.view(np.uint8), connectivity=8)
     keep = np.zeros(n, bool)
     keep[lab[seed]] = True
