@@ -363,7 +363,7 @@ def label_extent(labels, n_labels, cos_t, sin_t, pmin, pmax):
 
 
 @njit
-def fill_background(img, known, rows, cols, n_rings, band, out):
+def fill_background(img, known, rows, cols, ring, n_rings, band, out):
     """Fill the grey level under excluded (dark) pixels from their known neighbours, in place.
 
     Parameters
@@ -374,6 +374,10 @@ def fill_background(img, known, rows, cols, n_rings, band, out):
         1 where the pixel's own grey is background; pixels filled here are set to 1.
     rows, cols : (K,) int64
         The excluded pixels (known == 0), none on the image border.
+    ring : (K,) int64
+        Chessboard distance of each excluded pixel to the nearest known pixel: the ring that
+        fills it (a ring fills every pixel with a known neighbour, so ring r fills exactly the
+        pixels at distance r).
     n_rings : int
         Rings filled inward from the known pixels.
     band : float
@@ -386,15 +390,32 @@ def fill_background(img, known, rows, cols, n_rings, band, out):
     -------
     n_left : int
         Excluded pixels still unfilled after ``n_rings`` rings.
+
+    Notes
+    -----
+    Each pixel is visited once, in its ring (the pixels are bucketed by ring first).
     """
     k = rows.shape[0]
-    act = np.arange(k)
+    count = np.zeros(n_rings + 2, np.int64)
+    for p in range(k):
+        r = ring[p]
+        if r >= 1 and r <= n_rings:
+            count[r] += 1
+    start = np.zeros(n_rings + 2, np.int64)
+    for r in range(1, n_rings + 1):
+        start[r + 1] = start[r] + count[r]
+    order = np.empty(start[n_rings + 1], np.int64)
+    fill = start.copy()
+    for p in range(k):
+        r = ring[p]
+        if r >= 1 and r <= n_rings:
+            order[fill[r]] = p
+            fill[r] += 1
     newv = np.empty(k, np.float32)
-    n_act = k
-    for _ in range(n_rings):
-        n_new = 0
-        for q in range(n_act):
-            p = act[q]
+    n_done = 0
+    for r in range(1, n_rings + 1):
+        for q in range(start[r], start[r + 1]):
+            p = order[q]
             i = rows[p]
             j = cols[p]
             newv[q] = np.float32(np.nan)
@@ -413,24 +434,14 @@ def fill_background(img, known, rows, cols, n_rings, band, out):
                         sm += out[i + di, j + dj]
                         c += 1
             newv[q] = sm / c
-            n_new += 1
-        if n_new == 0:
-            break
-        # apply after deciding the whole ring (parallel semantics), then compact the list
-        keep = 0
-        for q in range(n_act):
-            p = act[q]
+        # apply after deciding the whole ring (parallel semantics)
+        for q in range(start[r], start[r + 1]):
+            p = order[q]
             if newv[q] == newv[q]:
                 out[rows[p], cols[p]] = newv[q]
                 known[rows[p], cols[p]] = 1
-            else:
-                act[keep] = p
-                keep += 1
-        n_act = keep
-        if n_act == 0:
-            break
-    n_left = n_act
-    return n_left
+                n_done += 1
+    return k - n_done
 
 
 @njit

@@ -227,12 +227,19 @@ def _local_background(img, exclude, *, band, n_rings=4, max_rings=64):
     ``n_rings`` rings decide the rim; filling goes on (up to ``max_rings``) into the core of wide
     cracks, where the decision does not depend on it; anything left takes the median.
     """
+    import cv2
+
     from . import _kernels
-    known = np.pad((~exclude).astype(np.uint8), 1, mode="constant", constant_values=0)
+    ex = np.ascontiguousarray(exclude, bool)
+    known = np.pad((~ex).view(np.uint8), 1, mode="constant", constant_values=0)
     out = np.pad(np.ascontiguousarray(img, np.float32), 1, mode="constant", constant_values=0.0)
-    rr, cc = np.nonzero(known[1:-1, 1:-1] == 0)
+    rr, cc = np.nonzero(ex)
+    # the ring that fills each excluded pixel: its chessboard distance to the known pixels
+    ring = cv2.distanceTransform(ex.view(np.uint8), cv2.DIST_C, 3)[rr, cc]
     left = _kernels.fill_background(out, known, (rr + 1).astype(np.int64),
-                                    (cc + 1).astype(np.int64), int(max_rings), float(band), out)
+                                    (cc + 1).astype(np.int64),
+                                    np.minimum(ring, max_rings + 1).astype(np.int64),
+                                    int(max_rings), float(band), out)
     val = out[1:-1, 1:-1]
     if left:
         rest = known[1:-1, 1:-1] == 0
