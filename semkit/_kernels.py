@@ -509,6 +509,58 @@ def ridge_levels(a, bg, r, crack_level, noise, high_snr, low_snr, min_depth, low
             low[i, j] = inside and snr > low_snr and d > low_depth
 
 
+@njit_exact
+def partial_volume_sums(labels, sel, near, img, bg, crack_level, rim, out):
+    """Partial-volume coverage summed per object over its pixels and a ``rim``-px rim.
+
+    A pixel belongs to its own label when that label is selected, else to the largest
+    selected label in the (2 rim + 1)^2 box around it (a grey dilation of the selected
+    labels); its coverage is ``clip((bg - img) / max(bg - crack_level, 1e-3), 0, 1)`` in
+    float32, added in raster order to ``out`` (float64), as ``np.bincount`` would.
+
+    Parameters
+    ----------
+    labels : (M, N) int32
+    sel : (L,) bool
+        Selected labels (``sel[0]`` False; L > every label).
+    near : (M, N) uint8
+        Nonzero within ``rim`` px of a selected pixel (the only pixels that can count).
+    img, bg : (M, N) float32
+    crack_level : float32
+    rim : int
+    out : (L,) float64
+        Receives the sums (added to).
+    """
+    h, w = labels.shape
+    eps = np.float32(1e-3)
+    zero = np.float32(0.0)
+    one = np.float32(1.0)
+    for i in range(h):
+        for j in range(w):
+            if not near[i, j]:
+                continue
+            v = labels[i, j]
+            lab = v if sel[v] else 0
+            if lab == 0:
+                for a in range(max(i - rim, 0), min(i + rim + 1, h)):
+                    for b in range(max(j - rim, 0), min(j + rim + 1, w)):
+                        u = labels[a, b]
+                        if sel[u] and u > lab:
+                            lab = u
+            if lab == 0:
+                continue
+            g = bg[i, j]
+            d = g - crack_level
+            if not d >= eps:
+                d = eps
+            c = (g - img[i, j]) / d
+            if c < zero:
+                c = zero
+            elif c > one:
+                c = one
+            out[lab] += c
+
+
 @njit
 def skeleton_window_sums(skel, aperture, mask, ends, dark, rr, cc, half, out):
     """Sums over the (2 half + 1)^2 box around each skeleton pixel, written in place.

@@ -22,3 +22,32 @@ def test_ridge_levels_equal_numpy_expressions():
                           f(min_depth), f(0.5 * min_depth), region, d2, s2, l2)
     assert np.array_equal(depth, d2)
     assert np.array_equal(seed, s2) and np.array_equal(low, l2)
+
+
+def test_partial_volume_area_kernel_equals_numpy_path():
+    import cv2
+
+    from semkit.measure import label_cracks, partial_volume_area
+    rng = np.random.default_rng(3)
+    m = cv2.dilate((rng.random((90, 120)) > 0.97).view(np.uint8), np.ones((2, 3), np.uint8))
+    lab, n = label_cracks(m.astype(bool))
+    img = rng.uniform(20, 200, lab.shape).astype(np.float32)
+    bg = (img + rng.uniform(-10, 60, lab.shape)).astype(np.float32)
+    for ids in (None, np.arange(1, n + 1, 3)):
+        for rim in (0, 1, 2):
+            fast = partial_volume_area(img, lab, n, background=bg, crack_level=25.0,
+                                       rim_px=rim, ids=ids)
+            ref = partial_volume_area(img, lab, n, background=bg,
+                                      crack_level=np.float64(25.0), rim_px=rim, ids=ids)
+            # the float64 crack level takes the NumPy path in float64: compare to float32 math
+            lab32 = lab if ids is None else np.where(np.isin(lab, ids), lab, 0)
+            labf = lab32.astype(np.float32)
+            if rim:
+                k = np.ones((2 * rim + 1,) * 2, np.uint8)
+                labf = np.where(labf > 0, labf, cv2.dilate(labf, k))
+            idx = np.flatnonzero(labf.ravel())
+            cov = np.clip((bg.ravel()[idx] - img.ravel()[idx])
+                          / np.maximum(bg.ravel()[idx] - 25.0, 1e-3), 0.0, 1.0)
+            want = np.bincount(labf.ravel()[idx].astype(np.int64), cov, minlength=n + 1)
+            assert np.array_equal(fast, want)
+            assert np.allclose(ref, want, rtol=1e-5)
