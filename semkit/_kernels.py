@@ -510,6 +510,32 @@ def ridge_levels(a, bg, r, crack_level, noise, high_snr, low_snr, min_depth, low
 
 
 @njit_exact
+def crack_candidates(img, closed, dark_level, line_min, line_frac, crack_level, out):
+    """Pixels that might be crack, as the NumPy expression ``(img < dark_level) | ((line >
+    line_min) & (line > line_frac * (closed - crack_level)))`` with ``line = closed - img``.
+
+    The scalars come typed as NumPy would use them against float32 arrays (float32 for a
+    Python number, float64 for a float64 scalar), so the comparisons round alike.
+
+    Parameters
+    ----------
+    img, closed : (M, N) float32
+        Image and its grey closing.
+    dark_level, line_min, line_frac, crack_level : float32 or float64
+    out : (M, N) bool
+        Receives the candidates.
+    """
+    h, w = img.shape
+    for i in range(h):
+        for j in range(w):
+            a = img[i, j]
+            c = closed[i, j]
+            line = c - a
+            out[i, j] = (a < dark_level) or (line > line_min
+                                             and line > line_frac * (c - crack_level))
+
+
+@njit_exact
 def partial_volume_sums(labels, sel, near, img, bg, crack_level, rim, out):
     """Partial-volume coverage summed per object over its pixels and a ``rim``-px rim.
 

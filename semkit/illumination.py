@@ -127,7 +127,7 @@ def illumination_field(image, *, method="polynomial", degree=config.FLATTEN_POLY
         field = bg / bg.max()
     else:
         raise ValueError(f"method: expected 'polynomial' or 'gaussian', got {method!r}")
-    return field.astype(np.float32)
+    return field.astype(np.float32, copy=False)
 
 
 def flatten_illumination(image, *, method="polynomial", degree=config.FLATTEN_POLY_DEGREE):

@@ -95,7 +95,8 @@ def ridge_response(image, *, sigmas=config.RIDGE_SIGMAS_PX, kappa=config.RIDGE_E
 
 def ridge_mask(image, *, crack_level, region=None, sigmas=config.RIDGE_SIGMAS_PX,
                high_snr=config.RIDGE_HIGH_SNR, low_snr=config.RIDGE_LOW_SNR,
-               min_depth=config.RIDGE_MIN_DEPTH_FRACTION, closing_px=config.RIDGE_CLOSING_PX):
+               min_depth=config.RIDGE_MIN_DEPTH_FRACTION, closing_px=config.RIDGE_CLOSING_PX,
+               return_components=False):
     """Thin dark lines: hysteresis on the ridge response, kept where deep enough.
 
     Parameters
@@ -121,6 +122,9 @@ def ridge_mask(image, *, crack_level, region=None, sigmas=config.RIDGE_SIGMAS_PX
         Crack candidates (the ridge cores: pixels where R passes the low level).
     depth : (M, N) ndarray of float32
         Depth below the local background as a share of the local contrast.
+    components : tuple
+        Only with ``return_components``: ``(labels, keep)``, the 8-connected components of
+        the low-level mask and which of them form ``mask`` (for :func:`add_ridge_lines`).
     """
     import cv2
 
@@ -141,10 +145,12 @@ def ridge_mask(image, *, crack_level, region=None, sigmas=config.RIDGE_SIGMAS_PX
     keep = np.zeros(n, bool)
     keep[lab[seed]] = True
     keep[0] = False
-    return keep[lab], depth.astype(np.float32, copy=False)
+    if return_components:
+        return keep[lab], depth, (lab, keep)
+    return keep[lab], depth
 
 
-def add_ridge_lines(detect, area, ridge, depth):
+def add_ridge_lines(detect, area, ridge, depth, components=None):
     """Fuse ridge lines with a threshold's masks: lines the threshold missed become cracks.
 
     Ridge lines touching a threshold object are left out, so the threshold's objects keep
@@ -159,15 +165,22 @@ def add_ridge_lines(detect, area, ridge, depth):
     ridge : (M, N) ndarray of bool
     depth : (M, N) ndarray of float32
         :func:`ridge_mask` outputs.
+    components : tuple, optional
+        ``(labels, keep)`` from ``ridge_mask(..., return_components=True)``: the lines are
+        the kept components, so they need not be labelled again.
 
     Returns
     -------
     detect, area : (M, N) ndarray of bool
     """
     import cv2
-    n, lab = cv2.connectedComponents(ridge.view(np.uint8), connectivity=8)
+    if components is None:
+        n, lab = cv2.connectedComponents(ridge.view(np.uint8), connectivity=8)
+        touch = np.zeros(n, bool)
+    else:  # components not in the ridge mask count as touching: never new
+        lab, keep = components
+        touch = ~keep
     near = cv2.dilate(detect.view(np.uint8), np.ones((3, 3), np.uint8)).view(bool)
-    touch = np.zeros(n, bool)
     touch[lab[near & ridge]] = True
     touch[0] = True
     new = ~touch[lab]

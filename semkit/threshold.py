@@ -261,6 +261,12 @@ def noise_sigma(image) -> float:
     return float(1.4826 * np.median(np.abs(v - np.median(v))) / 0.943) + 1e-6
 
 
+def _operand(x):
+    """A scalar as NumPy uses it against a float32 array: a Python number is cast to float32
+    (NEP 50), a NumPy scalar keeps its type."""
+    return np.float32(x) if type(x) in (float, int) else x
+
+
 def threshold_auto(image, *, area_fraction=config.AUTO_AREA_FRACTION,
                    detect_fraction=config.AUTO_DETECT_FRACTION,
                    seed_fraction=config.AUTO_SEED_FRACTION) -> ThresholdResult:
@@ -277,6 +283,8 @@ def threshold_auto(image, *, area_fraction=config.AUTO_AREA_FRACTION,
     result : ThresholdResult
     """
     import cv2
+
+    from . import _kernels
     img = np.asarray(image, np.float32)
     lv = dark_class_levels(img)
     note0 = ""
@@ -294,10 +302,13 @@ def threshold_auto(image, *, area_fraction=config.AUTO_AREA_FRACTION,
     # exclude everything that might be crack (incl. its blurred rim) from the background:
     # darker than the darkest mineral, or a narrow dark line that a grey closing fills in
     closed = cv2.morphologyEx(img, cv2.MORPH_CLOSE, np.ones((7, 7), np.uint8))
-    line = closed - img
-    cand = (img < lv.mineral - 3.0 * lv.sigma) | (
-        (line > config.AUTO_DETECT_SIGMAS * sn)
-        & (line > config.CANDIDATE_LINE_FRACTION * (closed - lv.crack)))
+    # (img < mineral - 3 sigma) | (line > k sn) & (line > f (closed - crack)), line = closed - img
+    cand = np.empty(img.shape, bool)
+    _kernels.crack_candidates(np.ascontiguousarray(img), closed,
+                              _operand(lv.mineral - 3.0 * lv.sigma),
+                              _operand(config.AUTO_DETECT_SIGMAS * sn),
+                              _operand(config.CANDIDATE_LINE_FRACTION), _operand(lv.crack),
+                              cand)
     cand = cv2.dilate(cand.view(np.uint8), np.ones((5, 5), np.uint8)).view(bool)
     bg = _local_background(img, cand, band=config.BACKGROUND_BAND_SIGMAS * sn)
     # only candidates can differ from their background: decide there

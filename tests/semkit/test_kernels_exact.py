@@ -51,3 +51,19 @@ def test_partial_volume_area_kernel_equals_numpy_path():
             want = np.bincount(labf.ravel()[idx].astype(np.int64), cov, minlength=n + 1)
             assert np.array_equal(fast, want)
             assert np.allclose(ref, want, rtol=1e-5)
+
+
+def test_crack_candidates_equal_numpy_expression_for_both_scalar_kinds():
+    from semkit.threshold import _operand
+    rng = np.random.default_rng(11)
+    img = rng.uniform(0, 200, (70, 90)).astype(np.float32)
+    closed = (img + rng.uniform(0, 30, img.shape)).astype(np.float32)
+    for mineral, crack in ((120.3, 41.7), (np.float64(120.3), np.float64(41.7)),
+                           (np.float32(120.3), 41.7)):
+        dark, kmin, frac = mineral - 3.0 * 2.1, 4.0 * 1.3, 0.35
+        line = closed - img
+        want = (img < dark) | ((line > kmin) & (line > frac * (closed - crack)))
+        got = np.empty(img.shape, bool)
+        _kernels.crack_candidates(img, closed, _operand(dark), _operand(kmin), _operand(frac),
+                                  _operand(crack), got)
+        assert np.array_equal(got, want)
