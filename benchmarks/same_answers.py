@@ -52,6 +52,13 @@ def _compare(a, b, rtol):
     ia, ib = (pd.read_csv(p / "images.csv").set_index("image") for p in (a, b))
     ca, cb = (pd.read_csv(p / "cracks.csv") for p in (a, b))
     for name in ia.index:
+        ea, eb = (str(t.at[name, "error"]) if pd.notna(t.at[name, "error"]) else ""
+                  for t in (ia, ib))
+        if ea or eb:  # a failed image: the same failure on both sides
+            rows.append(dict(image=name, crack_px=0, mask_diff_px=0 if ea == eb else -1,
+                             labels_same=ea == eb, max_rel_diff=0.0, cracks_same=ea == eb,
+                             error=ea or eb))
+            continue
         ma = np.asarray(_read(a / "masks" / f"{pathlib.Path(name).stem}_cracks.png")) > 0
         mb = np.asarray(_read(b / "masks" / f"{pathlib.Path(name).stem}_cracks.png")) > 0
         la = _read(a / "masks" / f"{pathlib.Path(name).stem}_labels.png")
@@ -68,7 +75,7 @@ def _compare(a, b, rtol):
                         rtol=rtol, atol=0, equal_nan=True)
         rows.append(dict(image=name, crack_px=int(ma.sum()), mask_diff_px=int((ma != mb).sum()),
                          labels_same=bool(np.array_equal(la, lb)), max_rel_diff=worst,
-                         cracks_same=bool(same_cracks)))
+                         cracks_same=bool(same_cracks), error=""))
     return pd.DataFrame(rows)
 
 
