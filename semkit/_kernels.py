@@ -299,6 +299,16 @@ def prune_spurs(skel, rows, cols, half_width, spur_half_widths, spur_extra_px):
 
 
 @njit
+def label_counts(labels, out):
+    """Pixel count of each label, added to ``out`` (int64, longer than the largest label;
+    labels >= 0): ``np.bincount`` without its int64 copy of the image."""
+    h, w = labels.shape
+    for i in range(h):
+        for j in range(w):
+            out[labels[i, j]] += 1
+
+
+@njit
 def label_moments(labels, n_labels, out):
     """Raw moments of each label, one pass over the image, in place.
 

@@ -63,13 +63,16 @@ LOCAL_NAMES = ("log_aperture", "local_cv", "scatter", "layers", "excess", "end_d
                "fill")
 
 
-def crack_groups(crack_labels, *, link_px=LINK_PX, small_px=SMALL_OBJECT_PX):
+def crack_groups(crack_labels, *, link_px=LINK_PX, small_px=SMALL_OBJECT_PX, area=None):
     """Group id of every object: small objects join the nearest large object within link_px.
 
     Parameters
     ----------
     crack_labels : (M, N) ndarray of int
         Objects 1..n.
+
+    area : (n + 1,) ndarray of int, optional
+        Pixel count of each label, when already at hand.
 
     Returns
     -------
@@ -86,11 +89,12 @@ def crack_groups(crack_labels, *, link_px=LINK_PX, small_px=SMALL_OBJECT_PX):
     """
     import cv2
     lab = np.asarray(crack_labels)
-    n = int(lab.max())
+    n = int(lab.max()) if area is None else len(area) - 1
     group_of = np.arange(n + 1, dtype=np.int64)
     if n == 0:
         return group_of
-    area = np.bincount(lab.ravel(), minlength=n + 1)
+    if area is None:
+        area = np.bincount(lab.ravel(), minlength=n + 1)
     big = area >= small_px
     big[0] = False
     small = (~big) & (area > 0)
@@ -127,7 +131,7 @@ def group_quantile(g, v, q, m):
 
 
 def crack_morphology(crack_labels, *, image=None, skeleton=None, background=None,
-                     crack_level=None, window_px=WINDOW_PX, link_px=LINK_PX):
+                     crack_level=None, window_px=WINDOW_PX, link_px=LINK_PX, area=None):
     """Morphology of every crack group, and of every skeleton pixel.
 
     Parameters
@@ -143,6 +147,8 @@ def crack_morphology(crack_labels, *, image=None, skeleton=None, background=None
         given: a grey closing over ``BACKGROUND_PX`` and the 2nd percentile of the cracks).
     window_px : int
     link_px : float
+    area : (n + 1,) ndarray of int, optional
+        Pixel count of each label (index = label, n the largest), when already at hand.
 
     Returns
     -------
@@ -160,7 +166,7 @@ def crack_morphology(crack_labels, *, image=None, skeleton=None, background=None
     from .._kernels import skeleton_window_sums
     from ..skeleton import skeletonize
     lab = np.asarray(crack_labels)
-    n = int(lab.max())
+    n = int(lab.max()) if area is None else len(area) - 1
     F = np.full((n + 1, len(FEATURE_NAMES)), np.nan)
     empty = dict(rr=np.zeros(0, int), cc=np.zeros(0, int), group=np.zeros(0, int),
                  X=np.zeros((0, len(LOCAL_NAMES))))
@@ -168,7 +174,7 @@ def crack_morphology(crack_labels, *, image=None, skeleton=None, background=None
         return np.zeros(1, np.int64), F, empty
     mask = lab > 0
     skel = skeletonize(mask) if skeleton is None else (np.asarray(skeleton, bool) & mask)
-    group_of = crack_groups(lab, link_px=link_px)
+    group_of = crack_groups(lab, link_px=link_px, area=area)
     rr, cc = np.nonzero(skel)
     g = group_of[lab[rr, cc]]
     mask8 = mask.view(np.uint8)

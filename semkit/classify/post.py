@@ -82,11 +82,19 @@ def _post_table(crack_labels, *, image=None, skeleton=None, background=None, cra
     lab = np.asarray(crack_labels)
     if lab.ndim != 2:
         raise InputError(f"crack_labels: expected a 2-D array, got shape {lab.shape}")
-    ids = np.unique(lab[lab > 0])
+    area = None
+    if lab.dtype in (np.int32, np.int64) and lab.size and lab.min() >= 0:
+        from .._kernels import label_counts
+        area = np.zeros(int(lab.max()) + 1, np.int64)
+        label_counts(np.ascontiguousarray(lab), area)
+        ids = np.flatnonzero(area[1:]) + 1
+    else:
+        ids = np.unique(lab[lab > 0])
     if ids.size == 0:
         return pd.DataFrame(columns=["crack_id", *POST_COLUMNS]), np.zeros(1, np.int8)
     group_of, F, local = crack_morphology(lab, image=image, skeleton=skeleton,
-                                          background=background, crack_level=crack_level)
+                                          background=background, crack_level=crack_level,
+                                          area=area)
     groups = np.unique(group_of[ids])
     D = group_design(F, local, model)[groups]
     Fg = F[groups]
