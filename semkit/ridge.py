@@ -87,7 +87,9 @@ def ridge_response(image, *, sigmas=config.RIDGE_SIGMAS_PX, kappa=config.RIDGE_E
             dxx, dyy = _add_scale(a, s, kappa, out)
             if noise is None:
                 v = (s * s * (dxx[::2, ::2] + dyy[::2, ::2])).ravel()
-                noise = float(1.4826 * np.median(np.abs(v - np.median(v))))
+                # v is a fresh array: the medians may reorder it in place
+                noise = float(1.4826 * np.median(np.abs(v - np.median(v, overwrite_input=True)),
+                                                 overwrite_input=True))
     if out_small is not None:
         np.maximum(out, cv2.resize(out_small, (w, h), interpolation=cv2.INTER_LINEAR), out=out)
     return out, max(noise or 0.0, 1e-6)

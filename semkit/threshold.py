@@ -258,7 +258,8 @@ def noise_sigma(image) -> float:
         a = np.ascontiguousarray(a[r0:r0 + 512, c0:c0 + 512])
     hp = a - cv2.blur(a, (3, 3), borderType=cv2.BORDER_REFLECT)
     v = hp[1:-1:2, 1:-1:2].ravel()
-    return float(1.4826 * np.median(np.abs(v - np.median(v))) / 0.943) + 1e-6
+    mad = np.median(np.abs(v - np.median(v, overwrite_input=True)), overwrite_input=True)
+    return float(1.4826 * mad / 0.943) + 1e-6
 
 
 def _operand(x):
