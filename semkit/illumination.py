@@ -35,6 +35,7 @@ def _phase_offsets(r, keep):
     histogram, each pixel assigned to the nearest. Without this, a region rich in a bright
     mineral would pass for a brightly lit one."""
     from scipy.ndimage import gaussian_filter1d
+
     from .peaks import prominent_peaks
     v = r[keep]
     lo, hi = np.percentile(v, [0.5, 99.5])

@@ -157,6 +157,7 @@ def dark_class_levels(image) -> DarkLevels:
     """
     import cv2
     from scipy.ndimage import gaussian_filter1d
+
     from .peaks import prominent_peaks
     a = np.asarray(image, np.float32)
     step = max(int(np.ceil(np.sqrt(a.size / 300_000))), 1)
