@@ -20,7 +20,8 @@ PV_BACKGROUND_SIGMA_PX = config.PV_BACKGROUND_SIGMA_PX
 
 
 def _band_darkness(image, crack_labels, *, core=None, band_px=PV_BAND_PX,
-                   background_sigma_px=PV_BACKGROUND_SIGMA_PX, background=None):
+                   background_sigma_px=PV_BACKGROUND_SIGMA_PX, background=None,
+                   owner_image=False):
     """Partial-volume darkness at the band pixels only (see :func:`darkness_fraction`).
 
     Returns
@@ -30,7 +31,8 @@ def _band_darkness(image, crack_labels, *, core=None, band_px=PV_BAND_PX,
     f : (K,) ndarray of float64
         Their darkness fraction.
     owner : (K,) ndarray of int
-        Their nearest object's label.
+        Their nearest object's label (with ``owner_image``: the (M, N) image of the nearest
+        object's label of every pixel).
     """
     import cv2
     img = np.asarray(image)
@@ -41,7 +43,7 @@ def _band_darkness(image, crack_labels, *, core=None, band_px=PV_BAND_PX,
     src = np.zeros(int(near.max()) + 1, lab.dtype)
     src[near[obj]] = lab[obj]
     idx = np.flatnonzero(dist <= band_px)
-    owner = src[near.ravel()[idx]]
+    owner = src[near] if owner_image else src[near.ravel()[idx]]
     if background is not None:
         bg = np.asarray(background).ravel()[idx].astype(np.float64)
     else:
@@ -83,8 +85,7 @@ def darkness_fraction(image, crack_labels, *, core=None, band_px=PV_BAND_PX,
     f : (M, N) ndarray of float64
         clip((B - I) / (B - I_core), 0, 1) within ``band_px`` of an object, else 0.
     owner : (M, N) ndarray of int
-        Label of the nearest object pixel within ``band_px`` (which object a band pixel
-        belongs to), 0 elsewhere.
+        Label of the nearest object pixel (which object a band pixel belongs to).
 
     Notes
     -----
@@ -93,12 +94,12 @@ def darkness_fraction(image, crack_labels, *, core=None, band_px=PV_BAND_PX,
     ``band_px + 1`` from any object. The arithmetic runs on the band pixels only.
     """
     lab = np.asarray(crack_labels)
-    idx, fb, ob = _band_darkness(image, lab, core=core, band_px=band_px,
-                                 background_sigma_px=background_sigma_px, background=background)
+    idx, fb, owner = _band_darkness(image, lab, core=core, band_px=band_px,
+                                    background_sigma_px=background_sigma_px,
+                                    background=background, owner_image=True)
     f = np.zeros(lab.size, np.float64)
-    owner = np.zeros(lab.size, lab.dtype)
-    f[idx], owner[idx] = fb, ob
-    return f.reshape(lab.shape), owner.reshape(lab.shape)
+    f[idx] = fb
+    return f.reshape(lab.shape), owner
 
 
 def _owner_types(type_image, lab, owner):
