@@ -18,6 +18,12 @@ def njit(fn):
     return numba.njit(**_OPTS)(fn)
 
 
+def njit_exact(fn):
+    """``numba.njit`` without fastmath: every float operation rounds as NumPy's does, so a
+    kernel that fuses NumPy array expressions gives the same bits."""
+    return numba.njit(cache=True, nogil=True, error_model="numpy")(fn)
+
+
 @njit
 def polyline_excess(xs, ys, ws, ox, oy, out):
     """Distance excess of each pixel over a polyline of varying width, written in place.
@@ -293,6 +299,16 @@ def prune_spurs(skel, rows, cols, half_width, spur_half_widths, spur_extra_px):
 
 
 @njit
+def label_counts(labels, out):
+    """Pixel count of each label, added to ``out`` (int64, longer than the largest label;
+    labels >= 0): ``np.bincount`` without its int64 copy of the image."""
+    h, w = labels.shape
+    for i in range(h):
+        for j in range(w):
+            out[labels[i, j]] += 1
+
+
+@njit
 def label_moments(labels, n_labels, out):
     """Raw moments of each label, one pass over the image, in place.
 
@@ -357,7 +373,7 @@ def label_extent(labels, n_labels, cos_t, sin_t, pmin, pmax):
 
 
 @njit
-def fill_background(img, known, rows, cols, n_rings, band, out):
+def fill_background(img, known, rows, cols, ring, n_rings, band, out):
     """Fill the grey level under excluded (dark) pixels from their known neighbours, in place.
 
     Parameters
@@ -368,6 +384,10 @@ def fill_background(img, known, rows, cols, n_rings, band, out):
         1 where the pixel's own grey is background; pixels filled here are set to 1.
     rows, cols : (K,) int64
         The excluded pixels (known == 0), none on the image border.
+    ring : (K,) int64
+        Chessboard distance of each excluded pixel to the nearest known pixel: the ring that
+        fills it (a ring fills every pixel with a known neighbour, so ring r fills exactly the
+        pixels at distance r).
     n_rings : int
         Rings filled inward from the known pixels.
     band : float
@@ -380,15 +400,32 @@ def fill_background(img, known, rows, cols, n_rings, band, out):
     -------
     n_left : int
         Excluded pixels still unfilled after ``n_rings`` rings.
+
+    Notes
+    -----
+    Each pixel is visited once, in its ring (the pixels are bucketed by ring first).
     """
     k = rows.shape[0]
-    act = np.arange(k)
+    count = np.zeros(n_rings + 2, np.int64)
+    for p in range(k):
+        r = ring[p]
+        if r >= 1 and r <= n_rings:
+            count[r] += 1
+    start = np.zeros(n_rings + 2, np.int64)
+    for r in range(1, n_rings + 1):
+        start[r + 1] = start[r] + count[r]
+    order = np.empty(start[n_rings + 1], np.int64)
+    fill = start.copy()
+    for p in range(k):
+        r = ring[p]
+        if r >= 1 and r <= n_rings:
+            order[fill[r]] = p
+            fill[r] += 1
     newv = np.empty(k, np.float32)
-    n_act = k
-    for _ in range(n_rings):
-        n_new = 0
-        for q in range(n_act):
-            p = act[q]
+    n_done = 0
+    for r in range(1, n_rings + 1):
+        for q in range(start[r], start[r + 1]):
+            p = order[q]
             i = rows[p]
             j = cols[p]
             newv[q] = np.float32(np.nan)
@@ -407,24 +444,14 @@ def fill_background(img, known, rows, cols, n_rings, band, out):
                         sm += out[i + di, j + dj]
                         c += 1
             newv[q] = sm / c
-            n_new += 1
-        if n_new == 0:
-            break
-        # apply after deciding the whole ring (parallel semantics), then compact the list
-        keep = 0
-        for q in range(n_act):
-            p = act[q]
+        # apply after deciding the whole ring (parallel semantics)
+        for q in range(start[r], start[r + 1]):
+            p = order[q]
             if newv[q] == newv[q]:
                 out[rows[p], cols[p]] = newv[q]
                 known[rows[p], cols[p]] = 1
-            else:
-                act[keep] = p
-                keep += 1
-        n_act = keep
-        if n_act == 0:
-            break
-    n_left = n_act
-    return n_left
+                n_done += 1
+    return k - n_done
 
 
 @njit
@@ -455,6 +482,119 @@ def ridge_strength(dxx, dyy, dxy, gx, gy, s2, ks, out):
                                                                + gy[i, j] * gy[i, j])
             if r > out[i, j]:
                 out[i, j] = r
+
+
+@njit_exact
+def ridge_levels(a, bg, r, crack_level, noise, high_snr, low_snr, min_depth, low_depth, region,
+                 depth, seed, low):
+    """Depth below the background and the hysteresis masks of :func:`semkit.ridge.ridge_mask`,
+    in one pass (float32 throughout, as the NumPy expressions it replaces).
+
+    Parameters
+    ----------
+    a, bg, r : (M, N) float32
+        Image, local background and ridge response.
+    crack_level, noise, high_snr, low_snr, min_depth, low_depth : float32
+    region : (M, N) bool
+        Sample region (all True for none).
+    depth : (M, N) float32
+        Receives ``(bg - a) / max(bg - crack_level, 1e-3)``.
+    seed, low : (M, N) bool
+        Receive ``r / noise > high_snr and depth > min_depth`` and
+        ``r / noise > low_snr and depth > low_depth``, inside the region.
+    """
+    h, w = a.shape
+    eps = np.float32(1e-3)
+    for i in range(h):
+        for j in range(w):
+            b = bg[i, j]
+            c = b - crack_level
+            if not c >= eps:    # np.maximum(c, 1e-3) (c is finite)
+                c = eps
+            d = (b - a[i, j]) / c
+            depth[i, j] = d
+            snr = r[i, j] / noise
+            inside = region[i, j]
+            seed[i, j] = inside and snr > high_snr and d > min_depth
+            low[i, j] = inside and snr > low_snr and d > low_depth
+
+
+@njit_exact
+def crack_candidates(img, closed, dark_level, line_min, line_frac, crack_level, out):
+    """Pixels that might be crack, as the NumPy expression ``(img < dark_level) | ((line >
+    line_min) & (line > line_frac * (closed - crack_level)))`` with ``line = closed - img``.
+
+    The scalars come typed as NumPy would use them against float32 arrays (float32 for a
+    Python number, float64 for a float64 scalar), so the comparisons round alike.
+
+    Parameters
+    ----------
+    img, closed : (M, N) float32
+        Image and its grey closing.
+    dark_level, line_min, line_frac, crack_level : float32 or float64
+    out : (M, N) bool
+        Receives the candidates.
+    """
+    h, w = img.shape
+    for i in range(h):
+        for j in range(w):
+            a = img[i, j]
+            c = closed[i, j]
+            line = c - a
+            out[i, j] = (a < dark_level) or (line > line_min
+                                             and line > line_frac * (c - crack_level))
+
+
+@njit_exact
+def partial_volume_sums(labels, sel, near, img, bg, crack_level, rim, out):
+    """Partial-volume coverage summed per object over its pixels and a ``rim``-px rim.
+
+    A pixel belongs to its own label when that label is selected, else to the largest
+    selected label in the (2 rim + 1)^2 box around it (a grey dilation of the selected
+    labels); its coverage is ``clip((bg - img) / max(bg - crack_level, 1e-3), 0, 1)`` in
+    float32, added in raster order to ``out`` (float64), as ``np.bincount`` would.
+
+    Parameters
+    ----------
+    labels : (M, N) int32
+    sel : (L,) bool
+        Selected labels (``sel[0]`` False; L > every label).
+    near : (M, N) uint8
+        Nonzero within ``rim`` px of a selected pixel (the only pixels that can count).
+    img, bg : (M, N) float32
+    crack_level : float32
+    rim : int
+    out : (L,) float64
+        Receives the sums (added to).
+    """
+    h, w = labels.shape
+    eps = np.float32(1e-3)
+    zero = np.float32(0.0)
+    one = np.float32(1.0)
+    for i in range(h):
+        for j in range(w):
+            if not near[i, j]:
+                continue
+            v = labels[i, j]
+            lab = v if sel[v] else 0
+            if lab == 0:
+                for a in range(max(i - rim, 0), min(i + rim + 1, h)):
+                    for b in range(max(j - rim, 0), min(j + rim + 1, w)):
+                        u = labels[a, b]
+                        if sel[u] and u > lab:
+                            lab = u
+            if lab == 0:
+                continue
+            g = bg[i, j]
+            d = g - crack_level
+            if not d >= eps:
+                d = eps
+            c = (g - img[i, j]) / d
+            if c < zero:
+                c = zero
+            elif c > one:
+                c = one
+            out[lab] += c
 
 
 @njit

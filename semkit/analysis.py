@@ -164,7 +164,10 @@ class CrackAnalysis:
         if not self.options.ridge or t.method != "auto" or not np.isfinite(t.crack_level):
             return None
         from .ridge import ridge_mask
-        return ridge_mask(self.smooth, crack_level=t.crack_level, region=self.region.mask)
+        mask, depth, self._ridge_components = ridge_mask(
+            self.smooth, crack_level=t.crack_level, region=self.region.mask,
+            return_components=True)
+        return mask, depth
 
     @functools.cached_property
     def detection(self):
@@ -179,7 +182,8 @@ class CrackAnalysis:
             det, area = t.detect_mask, t.mask
             if self.ridge is not None:
                 from .ridge import add_ridge_lines
-                det, area = add_ridge_lines(det, area, *self.ridge)
+                det, area = add_ridge_lines(det, area, *self.ridge,
+                                            components=self._ridge_components)
         inside = self.region.mask
         return det & inside, area & inside
 
@@ -310,7 +314,9 @@ class CrackAnalysis:
         """Labels of cracks only (pores set to 0); ids match ``cracks.crack_id``."""
         keep = np.zeros(self.n_objects + 1, bool)
         keep[self.cracks["crack_id"].to_numpy()] = True
-        return np.where(keep[self.labels], self.labels, 0).astype(np.int32)
+        if keep[1:].all():
+            return self.labels
+        return np.where(keep[self.labels], self.labels, 0).astype(np.int32, copy=False)
 
     # stage 8: grains
     @functools.cached_property

@@ -19,6 +19,52 @@ PV_BAND_PX = config.PV_BAND_PX
 PV_BACKGROUND_SIGMA_PX = config.PV_BACKGROUND_SIGMA_PX
 
 
+def _band_darkness(image, crack_labels, *, core=None, band_px=PV_BAND_PX,
+                   background_sigma_px=PV_BACKGROUND_SIGMA_PX, background=None,
+                   owner_image=False):
+    """Partial-volume darkness at the band pixels only (see :func:`darkness_fraction`).
+
+    Returns
+    -------
+    idx : (K,) ndarray of int
+        Flat indices (raster order) of the pixels within ``band_px`` of an object.
+    f : (K,) ndarray of float64
+        Their darkness fraction.
+    owner : (K,) ndarray of int
+        Their nearest object's label (with ``owner_image``: the (M, N) image of the nearest
+        object's label of every pixel).
+    """
+    import cv2
+    img = np.asarray(image)
+    lab = np.asarray(crack_labels)
+    obj = lab > 0
+    dist, near = cv2.distanceTransformWithLabels((~obj).astype(np.uint8), cv2.DIST_L2, 5,
+                                                 labelType=cv2.DIST_LABEL_PIXEL)
+    src = np.zeros(int(near.max()) + 1, lab.dtype)
+    src[near[obj]] = lab[obj]
+    idx = np.flatnonzero(dist <= band_px)
+    owner = src[near] if owner_image else src[near.ravel()[idx]]
+    if background is not None:
+        bg = np.asarray(background).ravel()[idx].astype(np.float64)
+    else:
+        img64 = np.asarray(img, np.float64)
+        bg_mask = dist > band_px + 1
+
+        def blur(a):
+            return cv2.GaussianBlur(a.astype(np.float32), (0, 0), background_sigma_px,
+                                    borderType=cv2.BORDER_REFLECT).astype(np.float64)
+        num = blur(np.where(bg_mask, img64, 0.0)).ravel()[idx]
+        den = blur(bg_mask).ravel()[idx]
+        fill = np.median(img64[bg_mask]) if bg_mask.any() else img64.max()
+        bg = np.where(den > 1e-3, num / np.maximum(den, 1e-3), fill)
+    if core is None:
+        v = img[obj].astype(np.float64)
+        core = float(np.percentile(v, 2)) if v.size else float(img.min())
+    i = img.ravel()[idx].astype(np.float64)
+    f = np.clip((bg - i) / np.maximum(bg - float(core), 1e-6), 0.0, 1.0)
+    return idx, f, owner
+
+
 def darkness_fraction(image, crack_labels, *, core=None, band_px=PV_BAND_PX,
                       background_sigma_px=PV_BACKGROUND_SIGMA_PX, background=None):
     """Partial-volume darkness of each pixel near the cracks (0 background .. 1 crack core).
@@ -45,35 +91,15 @@ def darkness_fraction(image, crack_labels, *, core=None, band_px=PV_BAND_PX,
     -----
     OpenCV's 5 x 5 distance transform (within 2 % of the Euclidean distance) finds the band
     and the nearest object; B is a normalised Gaussian convolution of the pixels farther than
-    ``band_px + 1`` from any object.
+    ``band_px + 1`` from any object. The arithmetic runs on the band pixels only.
     """
-    import cv2
-    img = np.asarray(image, dtype=np.float64)
     lab = np.asarray(crack_labels)
-    obj = lab > 0
-    dist, near = cv2.distanceTransformWithLabels((~obj).astype(np.uint8), cv2.DIST_L2, 5,
-                                                 labelType=cv2.DIST_LABEL_PIXEL)
-    src = np.zeros(int(near.max()) + 1, lab.dtype)
-    src[near[obj]] = lab[obj]
-    owner = src[near]
-    region = dist <= band_px
-    if background is not None:
-        bg = np.asarray(background, np.float64)
-    else:
-        bg_mask = dist > band_px + 1
-
-        def blur(a):
-            return cv2.GaussianBlur(a.astype(np.float32), (0, 0), background_sigma_px,
-                                    borderType=cv2.BORDER_REFLECT).astype(np.float64)
-        num = blur(np.where(bg_mask, img, 0.0))
-        den = blur(bg_mask)
-        fill = np.median(img[bg_mask]) if bg_mask.any() else img.max()
-        bg = np.where(den > 1e-3, num / np.maximum(den, 1e-3), fill)
-    if core is None:
-        core = float(np.percentile(img[obj], 2)) if obj.any() else float(img.min())
-    f = np.clip((bg - img) / np.maximum(bg - float(core), 1e-6), 0.0, 1.0)
-    f[~region] = 0.0
-    return f, owner
+    idx, fb, owner = _band_darkness(image, lab, core=core, band_px=band_px,
+                                    background_sigma_px=background_sigma_px,
+                                    background=background, owner_image=True)
+    f = np.zeros(lab.size, np.float64)
+    f[idx] = fb
+    return f.reshape(lab.shape), owner
 
 
 def _owner_types(type_image, lab, owner):
@@ -121,7 +147,7 @@ def typed_areas(image, crack_labels, type_image=None, *, core=None, band_px=PV_B
     f = clip((B - I) / (B - I_core), 0, 1) with B the local background; area = sum f over the
     object and its band (band pixels belong to the nearest object and take its majority type).
     """
-    img = np.asarray(image, dtype=np.float64)
+    img = np.asarray(image)
     lab = np.asarray(crack_labels)
     if img.shape != lab.shape or img.ndim != 2:
         raise InputError(f"crack_labels: expected shape {img.shape}, got {lab.shape}")
@@ -129,18 +155,25 @@ def typed_areas(image, crack_labels, type_image=None, *, core=None, band_px=PV_B
     cols = ["crack_id", "area_pv_px", "area_T_px", "area_S_px", "area_M_px"]
     if n == 0:
         return pd.DataFrame(columns=cols)
-    obj = lab > 0
-    f, owner = darkness_fraction(img, lab, core=core, band_px=band_px,
-                                 background_sigma_px=background_sigma_px,
-                                 background=background)
-    types = np.zeros(lab.shape, np.int64) if type_image is None else \
-        _owner_types(np.asarray(type_image).astype(np.int64), lab, owner)
+    # sums over the band pixels only: f is 0 elsewhere, so the sums are the same
+    idx, f, owner = _band_darkness(img, lab, core=core, band_px=band_px,
+                                   background_sigma_px=background_sigma_px,
+                                   background=background)
     out = {"crack_id": np.arange(1, n + 1),
-           "area_pv_px": np.bincount(owner.ravel(), f.ravel(), minlength=n + 1)[1:]}
-    for k, name in ((1, "area_T_px"), (2, "area_S_px"), (3, "area_M_px")):
-        w = np.where(types == k, f, 0.0)
-        out[name] = np.bincount(owner.ravel(), w.ravel(), minlength=n + 1)[1:]
+           "area_pv_px": np.bincount(owner, f, minlength=n + 1)[1:]}
+    if type_image is None:
+        for name in ("area_T_px", "area_S_px", "area_M_px"):
+            out[name] = np.zeros(n)
+    else:
+        owner_img = np.zeros(lab.size, np.int64)
+        owner_img[idx] = owner
+        types = _owner_types(np.asarray(type_image).astype(np.int64), lab,
+                             owner_img.reshape(lab.shape)).ravel()[idx]
+        for k, name in ((1, "area_T_px"), (2, "area_S_px"), (3, "area_M_px")):
+            out[name] = np.bincount(owner, np.where(types == k, f, 0.0), minlength=n + 1)[1:]
     t = pd.DataFrame(out)
+    # every object pixel is a band pixel that owns itself, and owners are objects: the labels
+    # present are the owners
     present = np.zeros(n + 1, bool)
-    present[lab[obj]] = True
+    present[owner] = True
     return t[present[1:]].reset_index(drop=True)

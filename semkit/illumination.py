@@ -35,14 +35,15 @@ def _phase_offsets(r, keep):
     histogram, each pixel assigned to the nearest. Without this, a region rich in a bright
     mineral would pass for a brightly lit one."""
     from scipy.ndimage import gaussian_filter1d
-    from scipy.signal import find_peaks
+
+    from .peaks import prominent_peaks
     v = r[keep]
     lo, hi = np.percentile(v, [0.5, 99.5])
     if hi - lo < 0.1:  # phases differing by < ~10 % in grey are not told apart
         return np.zeros_like(r)
     h, e = np.histogram(v, bins=64, range=(lo, hi))
     hs = gaussian_filter1d(h.astype(float), 1.5)
-    pk, _ = find_peaks(np.r_[0.0, hs, 0.0], prominence=0.05 * hs.max())
+    pk = prominent_peaks(np.r_[0.0, hs, 0.0], 0.05 * hs.max())
     c = 0.5 * (e[1:] + e[:-1])[pk - 1]
     if c.size > 1:  # merge peaks closer than 0.05 in log grey (5 %)
         keep = np.r_[True, np.diff(c) > 0.05]
@@ -127,7 +128,7 @@ def illumination_field(image, *, method="polynomial", degree=config.FLATTEN_POLY
         field = bg / bg.max()
     else:
         raise ValueError(f"method: expected 'polynomial' or 'gaussian', got {method!r}")
-    return field.astype(np.float32)
+    return field.astype(np.float32, copy=False)
 
 
 def flatten_illumination(image, *, method="polynomial", degree=config.FLATTEN_POLY_DEGREE):

@@ -101,10 +101,8 @@ def crack_table(labels, n, *, pixel_size_um, skeleton=None, area_mask=None, imag
     """
     area_all, cx, cy, mxx, myy, mxy, _, _ = object_moments(labels, n)
     if area_mask is not None:
-        from . import _kernels
-        m = np.zeros((n + 1, 8), np.float64)
-        _kernels.label_moments(np.where(area_mask, labels, 0).astype(np.int32), n + 1, m)
-        area_px = m[:, 0]
+        area_px = np.bincount(np.asarray(labels)[np.asarray(area_mask, bool)],
+                              minlength=n + 1).astype(np.float64)
     else:
         area_px = area_all
     px = float(pixel_size_um)
@@ -155,6 +153,30 @@ def crack_table(labels, n, *, pixel_size_um, skeleton=None, area_mask=None, imag
     return df
 
 
+def _partial_volume_kernel(image, lab, n, background, crack_level, rim_px, ids):
+    """:func:`partial_volume_area` in one numba pass (same float32 arithmetic, same order)."""
+    import cv2
+
+    from . import _kernels
+    size = max(n, int(lab.max(initial=0))) + 1
+    sel = np.zeros(size, bool)
+    if ids is None:
+        sel[1:] = True
+    else:
+        sel[np.asarray(ids, np.int64)] = True
+        sel[0] = False
+    rim = max(int(rim_px), 0)
+    near = sel[lab].view(np.uint8)
+    if rim:
+        near = cv2.dilate(near, np.ones((2 * rim + 1, 2 * rim + 1), np.uint8))
+    out = np.zeros(size, np.float64)
+    _kernels.partial_volume_sums(np.ascontiguousarray(lab), sel, near,
+                                 np.ascontiguousarray(image, np.float32),
+                                 np.ascontiguousarray(background, np.float32),
+                                 np.float32(crack_level), rim, out)
+    return out
+
+
 def partial_volume_area(image, labels, n, *, background, crack_level, rim_px=1, ids=None):
     """Area of each object as the sum of its pixels' crack coverage (partial volume), px.
 
@@ -180,6 +202,8 @@ def partial_volume_area(image, labels, n, *, background, crack_level, rim_px=1, 
     """
     import cv2
     lab = np.asarray(labels, np.int32)
+    if (np.zeros(1, np.float32) - crack_level).dtype == np.float32:   # float32 arithmetic
+        return _partial_volume_kernel(image, lab, n, background, crack_level, rim_px, ids)
     if ids is not None:
         sel = np.zeros(n + 1, bool)
         sel[np.asarray(ids, np.int64)] = True

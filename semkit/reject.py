@@ -63,9 +63,10 @@ RULES = (
 )
 
 
-def _label_percentiles(values, lab, n, qs, bins=256):
+def _label_percentiles(values, lab, n, qs, bins=256, std=True):
     """Per label 0..n: the ``qs`` percentiles (to 1/``bins`` of the value range) and the std
-    of ``values``, from per-label histograms (one ``bincount``; no sort).
+    of ``values`` (None with ``std=False``), from per-label histograms (one ``bincount``; no
+    sort).
 
     ``values`` and ``lab`` are 1-D, over the pixels concerned only."""
     out = np.full((len(qs), n + 1), np.nan)
@@ -84,6 +85,8 @@ def _label_percentiles(values, lab, n, qs, bins=256):
         rank = np.floor((cnt - 1) * q / 100.0) + 1
         idx = np.argmax(cum >= rank[:, None], axis=1)
         out[k, has] = lo + (idx[has] + 0.5) * step
+    if not std:
+        return out, None
     c = np.maximum(cnt, 1)
     s1 = np.bincount(lab, weights=v, minlength=n + 1)
     s2 = np.bincount(lab, weights=np.square(v, dtype=np.float64), minlength=n + 1)
@@ -98,6 +101,26 @@ def _grow(labels, width):
     a = labels.astype(np.uint16) if labels.max(initial=0) < 65536 else \
         labels.astype(np.float32)
     return cv2.dilate(a, k)
+
+
+def _window_counts(ri, ci, qr, qc, w):
+    """How many points ``(ri, ci)`` lie in the w x w box centred on each query ``(qr, qc)``,
+    as float32 (what an unnormalised box filter of the point counts reads there)."""
+    half = w // 2
+    out = np.zeros(qr.size, np.float32)
+    if ri.size == 0 or qr.size == 0:
+        return out
+    order = np.argsort(ri, kind="stable")
+    rs, cs = ri[order], ci[order]
+    lo = np.searchsorted(rs, qr - half, side="left")
+    cnt = np.searchsorted(rs, qr - half + w - 1, side="right") - lo
+    q = np.repeat(np.arange(qr.size), cnt)         # (query, point) pairs in the row band
+    start = np.cumsum(cnt) - cnt
+    pos = np.arange(q.size) - start[q] + lo[q]
+    c = cs[pos]
+    inside = (c >= qc[q] - half) & (c <= qc[q] - half + w - 1)
+    out[:] = np.bincount(q, weights=inside, minlength=qr.size)
+    return out
 
 
 def _ring(labels, width=2):
@@ -139,7 +162,7 @@ def object_evidence(labels, n, grey, *, crack_level, noise, skeleton=None, regio
     on = lab > 0
     lab_on = lab[on].astype(np.int64)
     # the object's dark core: its 20th percentile (a thin crack is mostly partial-volume rim)
-    core = _label_percentiles(g[on], lab_on, n, (20.0,))[0][0]
+    core = _label_percentiles(g[on], lab_on, n, (20.0,), std=False)[0][0]
     ring, ring_lab = _ring(lab)
     (ring_lo,), ring_sd = _label_percentiles(g[ring], ring_lab, n, (25.0,))
     side_depth = (ring_lo - core) / np.maximum(ring_lo - float(crack_level), 1e-3)
@@ -165,8 +188,8 @@ def object_evidence(labels, n, grey, *, crack_level, noise, skeleton=None, regio
     ref = float(np.percentile(inside, 75)) if inside.size else float(bg.max())
     rel_on = (bg[on] - float(crack_level)) / max(ref - float(crack_level), 1e-3)
     dens = cv2.boxFilter(on.view(np.uint8), cv2.CV_32F, (config.ZONE_WINDOW_PX,) * 2)
-    background_rel = _label_percentiles(rel_on, lab_on, n, (50.0,))[0][0]
-    density = _label_percentiles(dens[on], lab_on, n, (50.0,))[0][0]
+    background_rel = _label_percentiles(rel_on, lab_on, n, (50.0,), std=False)[0][0]
+    density = _label_percentiles(dens[on], lab_on, n, (50.0,), std=False)[0][0]
     # holes closed by an object (background not connected to the image border; owner: the
     # largest label next to the hole)
     back = np.pad((~on).view(np.uint8), 1, constant_values=1)
@@ -176,22 +199,21 @@ def object_evidence(labels, n, grey, *, crack_level, noise, skeleton=None, regio
     hole_grey = np.full(n + 1, np.nan)
     if holes.any():
         nh, hl = cv2.connectedComponents(holes.view(np.uint8), connectivity=4)
+        at = np.flatnonzero(holes)
+        hole_of = hl.ravel()[at]
         owner = np.zeros(nh, np.int64)
-        np.maximum.at(owner, hl[holes], _grow(lab, 1)[holes].astype(np.int64))
-        encloses = np.bincount(owner[1:], weights=np.bincount(hl[holes], minlength=nh)[1:],
+        np.maximum.at(owner, hole_of, _grow(lab, 1).ravel()[at].astype(np.int64))
+        encloses = np.bincount(owner[1:], weights=np.bincount(hole_of, minlength=nh)[1:],
                                minlength=n + 1)[:n + 1]
-        hole_grey = _label_percentiles(g[holes], owner[hl[holes]], n, (50.0,))[0][0]
+        hole_grey = _label_percentiles(g.ravel()[at], owner[hole_of], n, (50.0,), std=False)[0][0]
     hole_lift = (hole_grey - ring_lo) / np.maximum(ring_lo - float(crack_level), 1e-3)
     # other objects (>= 5 px) whose centre lies in the window around this one's centre
-    counts = np.zeros(lab.shape, np.float32)
     big = np.flatnonzero(area[1:] >= 5) + 1
     ri = np.clip(np.rint(cy[big]).astype(int), 0, lab.shape[0] - 1)
     ci = np.clip(np.rint(cx[big]).astype(int), 0, lab.shape[1] - 1)
-    np.add.at(counts, (ri, ci), 1.0)
-    w = config.ZONE_NEIGHBOUR_WINDOW_PX
-    counts = cv2.boxFilter(counts, -1, (w, w), normalize=False, borderType=cv2.BORDER_CONSTANT)
-    neighbours = counts[np.clip(np.rint(cy).astype(int), 0, lab.shape[0] - 1),
-                        np.clip(np.rint(cx).astype(int), 0, lab.shape[1] - 1)] - (area >= 5)
+    neighbours = _window_counts(ri, ci, np.clip(np.rint(cy).astype(int), 0, lab.shape[0] - 1),
+                                np.clip(np.rint(cx).astype(int), 0, lab.shape[1] - 1),
+                                config.ZONE_NEIGHBOUR_WINDOW_PX) - (area >= 5)
     texture = ring_sd / max(float(noise), 1e-6)
     ev = pd.DataFrame(dict(area_px=area, side_depth=side_depth, encloses_px=encloses,
                            hole_lift=hole_lift,

@@ -86,8 +86,10 @@ def ridge_response(image, *, sigmas=config.RIDGE_SIGMAS_PX, kappa=config.RIDGE_E
         else:
             dxx, dyy = _add_scale(a, s, kappa, out)
             if noise is None:
-                v = (s * s * (dxx + dyy))[::2, ::2].ravel()
-                noise = float(1.4826 * np.median(np.abs(v - np.median(v))))
+                v = (s * s * (dxx[::2, ::2] + dyy[::2, ::2])).ravel()
+                # v is a fresh array: the medians may reorder it in place
+                noise = float(1.4826 * np.median(np.abs(v - np.median(v, overwrite_input=True)),
+                                                 overwrite_input=True))
     if out_small is not None:
         np.maximum(out, cv2.resize(out_small, (w, h), interpolation=cv2.INTER_LINEAR), out=out)
     return out, max(noise or 0.0, 1e-6)
@@ -95,7 +97,8 @@ def ridge_response(image, *, sigmas=config.RIDGE_SIGMAS_PX, kappa=config.RIDGE_E
 
 def ridge_mask(image, *, crack_level, region=None, sigmas=config.RIDGE_SIGMAS_PX,
                high_snr=config.RIDGE_HIGH_SNR, low_snr=config.RIDGE_LOW_SNR,
-               min_depth=config.RIDGE_MIN_DEPTH_FRACTION, closing_px=config.RIDGE_CLOSING_PX):
+               min_depth=config.RIDGE_MIN_DEPTH_FRACTION, closing_px=config.RIDGE_CLOSING_PX,
+               return_components=False):
     """Thin dark lines: hysteresis on the ridge response, kept where deep enough.
 
     Parameters
@@ -121,28 +124,35 @@ def ridge_mask(image, *, crack_level, region=None, sigmas=config.RIDGE_SIGMAS_PX
         Crack candidates (the ridge cores: pixels where R passes the low level).
     depth : (M, N) ndarray of float32
         Depth below the local background as a share of the local contrast.
+    components : tuple
+        Only with ``return_components``: ``(labels, keep)``, the 8-connected components of
+        the low-level mask and which of them form ``mask`` (for :func:`add_ridge_lines`).
     """
     import cv2
+
+    from . import _kernels
     a = np.ascontiguousarray(image, np.float32)
     r, noise = ridge_response(a, sigmas=sigmas)
     bg = cv2.morphologyEx(a, cv2.MORPH_CLOSE, cv2.getStructuringElement(
         cv2.MORPH_ELLIPSE, (closing_px, closing_px)))
     bg = cv2.GaussianBlur(bg, (0, 0), 1.0)
-    depth = (bg - a) / np.maximum(bg - float(crack_level), 1e-3)
-    snr = r / noise
-    seed = (snr > high_snr) & (depth > min_depth)
-    low = (snr > low_snr) & (depth > 0.5 * min_depth)
-    if region is not None:
-        seed &= region
-        low &= region
+    depth = np.empty(a.shape, np.float32)
+    seed = np.empty(a.shape, bool)
+    low = np.empty(a.shape, bool)
+    reg = np.ones(a.shape, bool) if region is None else np.ascontiguousarray(region, bool)
+    f32 = np.float32
+    _kernels.ridge_levels(a, bg, r, f32(crack_level), f32(noise), f32(high_snr), f32(low_snr),
+                          f32(min_depth), f32(0.5 * min_depth), reg, depth, seed, low)
     n, lab = cv2.connectedComponents(low.view(np.uint8), connectivity=8)
     keep = np.zeros(n, bool)
     keep[lab[seed]] = True
     keep[0] = False
-    return keep[lab], depth.astype(np.float32)
+    if return_components:
+        return keep[lab], depth, (lab, keep)
+    return keep[lab], depth
 
 
-def add_ridge_lines(detect, area, ridge, depth):
+def add_ridge_lines(detect, area, ridge, depth, components=None):
     """Fuse ridge lines with a threshold's masks: lines the threshold missed become cracks.
 
     Ridge lines touching a threshold object are left out, so the threshold's objects keep
@@ -157,15 +167,22 @@ def add_ridge_lines(detect, area, ridge, depth):
     ridge : (M, N) ndarray of bool
     depth : (M, N) ndarray of float32
         :func:`ridge_mask` outputs.
+    components : tuple, optional
+        ``(labels, keep)`` from ``ridge_mask(..., return_components=True)``: the lines are
+        the kept components, so they need not be labelled again.
 
     Returns
     -------
     detect, area : (M, N) ndarray of bool
     """
     import cv2
-    n, lab = cv2.connectedComponents(ridge.view(np.uint8), connectivity=8)
+    if components is None:
+        n, lab = cv2.connectedComponents(ridge.view(np.uint8), connectivity=8)
+        touch = np.zeros(n, bool)
+    else:  # components not in the ridge mask count as touching: never new
+        lab, keep = components
+        touch = ~keep
     near = cv2.dilate(detect.view(np.uint8), np.ones((3, 3), np.uint8)).view(bool)
-    touch = np.zeros(n, bool)
     touch[lab[near & ridge]] = True
     touch[0] = True
     new = ~touch[lab]

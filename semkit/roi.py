@@ -108,15 +108,18 @@ def find_sample_region(image, *, noise=None):
     sm = cv2.GaussianBlur(a, (0, 0), 1.0)
     border = np.concatenate([sm[0], sm[-1], sm[1:-1, 0], sm[1:-1, -1]])
     best = None
-    med = float(np.median(sm[::2, ::2]))
+    med = None
     for level in (lo, hi):
+        cand_b = np.abs(border - level) <= tol
+        if cand_b.mean() < config.SURROUND_MIN_BORDER_FRACTION:
+            continue
+        if med is None:  # the bulk's level, only needed once the border qualifies
+            med = float(np.median(sm[::2, ::2]))
         if abs(level - med) < config.SURROUND_MIN_SEPARATION * tol:
             continue  # an extreme near the bulk of the image: no surround of its own
-        cand_b = np.abs(border - level) <= tol
-        if cand_b.mean() >= config.SURROUND_MIN_BORDER_FRACTION:
-            frac_b = cand_b.mean()
-            if best is None or frac_b > best[1]:
-                best = (level, frac_b)
+        frac_b = cand_b.mean()
+        if best is None or frac_b > best[1]:
+            best = (level, frac_b)
     if best is None:
         return _finish(full, "full")
     cand = np.abs(sm - best[0]) <= tol

@@ -108,7 +108,7 @@ def prune_spurs(skel, mask, *, half_widths=config.SPUR_HALF_WIDTHS,
     pad[1:-1, 1:-1] = s
     m = np.zeros(pad.shape, np.uint8)
     m[1:-1, 1:-1] = np.asarray(mask, bool)
-    dt = cv2.distanceTransform(m, cv2.DIST_L2, 5).astype(np.float32)
+    dt = cv2.distanceTransform(m, cv2.DIST_L2, 5)  # float32
     rr, cc = np.nonzero(pad)
     _kernels.prune_spurs(pad, rr.astype(np.int64), cc.astype(np.int64), dt,
                          float(half_widths), float(extra_px))

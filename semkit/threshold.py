@@ -157,7 +157,8 @@ def dark_class_levels(image) -> DarkLevels:
     """
     import cv2
     from scipy.ndimage import gaussian_filter1d
-    from scipy.signal import find_peaks
+
+    from .peaks import prominent_peaks
     a = np.asarray(image, np.float32)
     step = max(int(np.ceil(np.sqrt(a.size / 300_000))), 1)
     sub = np.ascontiguousarray(a[::step, ::step])
@@ -169,7 +170,7 @@ def dark_class_levels(image) -> DarkLevels:
     closed = cv2.morphologyEx(sub, cv2.MORPH_CLOSE, np.ones((ksz, ksz), np.uint8))
     hc, c = _hist(closed.ravel(), lo, hi)
     hcs = gaussian_filter1d(hc, 2.0)
-    peaks, _ = find_peaks(np.r_[0.0, hcs, 0.0], prominence=0.01 * hcs.max())
+    peaks = prominent_peaks(np.r_[0.0, hcs, 0.0], 0.01 * hcs.max())
     peaks = peaks - 1
     if peaks.size == 0:
         peaks = np.array([int(np.argmax(hcs))])
@@ -227,12 +228,19 @@ def _local_background(img, exclude, *, band, n_rings=4, max_rings=64):
     ``n_rings`` rings decide the rim; filling goes on (up to ``max_rings``) into the core of wide
     cracks, where the decision does not depend on it; anything left takes the median.
     """
+    import cv2
+
     from . import _kernels
-    known = np.pad((~exclude).astype(np.uint8), 1, mode="constant", constant_values=0)
+    ex = np.ascontiguousarray(exclude, bool)
+    known = np.pad((~ex).view(np.uint8), 1, mode="constant", constant_values=0)
     out = np.pad(np.ascontiguousarray(img, np.float32), 1, mode="constant", constant_values=0.0)
-    rr, cc = np.nonzero(known[1:-1, 1:-1] == 0)
+    rr, cc = np.nonzero(ex)
+    # the ring that fills each excluded pixel: its chessboard distance to the known pixels
+    ring = cv2.distanceTransform(ex.view(np.uint8), cv2.DIST_C, 3)[rr, cc]
     left = _kernels.fill_background(out, known, (rr + 1).astype(np.int64),
-                                    (cc + 1).astype(np.int64), int(max_rings), float(band), out)
+                                    (cc + 1).astype(np.int64),
+                                    np.minimum(ring, max_rings + 1).astype(np.int64),
+                                    int(max_rings), float(band), out)
     val = out[1:-1, 1:-1]
     if left:
         rest = known[1:-1, 1:-1] == 0
@@ -251,7 +259,14 @@ def noise_sigma(image) -> float:
         a = np.ascontiguousarray(a[r0:r0 + 512, c0:c0 + 512])
     hp = a - cv2.blur(a, (3, 3), borderType=cv2.BORDER_REFLECT)
     v = hp[1:-1:2, 1:-1:2].ravel()
-    return float(1.4826 * np.median(np.abs(v - np.median(v))) / 0.943) + 1e-6
+    mad = np.median(np.abs(v - np.median(v, overwrite_input=True)), overwrite_input=True)
+    return float(1.4826 * mad / 0.943) + 1e-6
+
+
+def _operand(x):
+    """A scalar as NumPy uses it against a float32 array: a Python number is cast to float32
+    (NEP 50), a NumPy scalar keeps its type."""
+    return np.float32(x) if type(x) in (float, int) else x
 
 
 def threshold_auto(image, *, area_fraction=config.AUTO_AREA_FRACTION,
@@ -270,6 +285,8 @@ def threshold_auto(image, *, area_fraction=config.AUTO_AREA_FRACTION,
     result : ThresholdResult
     """
     import cv2
+
+    from . import _kernels
     img = np.asarray(image, np.float32)
     lv = dark_class_levels(img)
     note0 = ""
@@ -287,10 +304,13 @@ def threshold_auto(image, *, area_fraction=config.AUTO_AREA_FRACTION,
     # exclude everything that might be crack (incl. its blurred rim) from the background:
     # darker than the darkest mineral, or a narrow dark line that a grey closing fills in
     closed = cv2.morphologyEx(img, cv2.MORPH_CLOSE, np.ones((7, 7), np.uint8))
-    line = closed - img
-    cand = (img < lv.mineral - 3.0 * lv.sigma) | (
-        (line > config.AUTO_DETECT_SIGMAS * sn)
-        & (line > config.CANDIDATE_LINE_FRACTION * (closed - lv.crack)))
+    # (img < mineral - 3 sigma) | (line > k sn) & (line > f (closed - crack)), line = closed - img
+    cand = np.empty(img.shape, bool)
+    _kernels.crack_candidates(np.ascontiguousarray(img), closed,
+                              _operand(lv.mineral - 3.0 * lv.sigma),
+                              _operand(config.AUTO_DETECT_SIGMAS * sn),
+                              _operand(config.CANDIDATE_LINE_FRACTION), _operand(lv.crack),
+                              cand)
     cand = cv2.dilate(cand.view(np.uint8), np.ones((5, 5), np.uint8)).view(bool)
     bg = _local_background(img, cand, band=config.BACKGROUND_BAND_SIGMAS * sn)
     # only candidates can differ from their background: decide there

@@ -63,13 +63,16 @@ LOCAL_NAMES = ("log_aperture", "local_cv", "scatter", "layers", "excess", "end_d
                "fill")
 
 
-def crack_groups(crack_labels, *, link_px=LINK_PX, small_px=SMALL_OBJECT_PX):
+def crack_groups(crack_labels, *, link_px=LINK_PX, small_px=SMALL_OBJECT_PX, area=None):
     """Group id of every object: small objects join the nearest large object within link_px.
 
     Parameters
     ----------
     crack_labels : (M, N) ndarray of int
         Objects 1..n.
+
+    area : (n + 1,) ndarray of int, optional
+        Pixel count of each label, when already at hand.
 
     Returns
     -------
@@ -86,23 +89,27 @@ def crack_groups(crack_labels, *, link_px=LINK_PX, small_px=SMALL_OBJECT_PX):
     """
     import cv2
     lab = np.asarray(crack_labels)
-    n = int(lab.max())
+    n = int(lab.max()) if area is None else len(area) - 1
     group_of = np.arange(n + 1, dtype=np.int64)
     if n == 0:
         return group_of
-    area = np.bincount(lab.ravel(), minlength=n + 1)
+    if area is None:
+        area = np.bincount(lab.ravel(), minlength=n + 1)
     big = area >= small_px
     big[0] = False
-    big_mask = big[lab]
     small = (~big) & (area > 0)
     small[0] = False
-    if not big_mask.any() or not small.any():
+    if not big.any() or not small.any():
         return group_of
-    dist, near = cv2.distanceTransformWithLabels((~big_mask).astype(np.uint8), cv2.DIST_L2, 5,
+    kind = big.astype(np.uint8)     # per label: 0 background, 1 large, 2 small
+    kind[small] = 2
+    kind_img = kind[lab]
+    big_mask = kind_img == 1
+    dist, near = cv2.distanceTransformWithLabels((~big_mask).view(np.uint8), cv2.DIST_L2, 5,
                                                  labelType=cv2.DIST_LABEL_PIXEL)
     src = np.zeros(int(near.max()) + 1, np.int64)
     src[near[big_mask]] = lab[big_mask]
-    sel = small[lab]
+    sel = kind_img == 2
     ids, d, tgt = lab[sel], dist[sel], src[near[sel]]
     order = np.lexsort((d, ids))
     first = order[np.r_[True, ids[order][1:] != ids[order][:-1]]]
@@ -124,7 +131,7 @@ def group_quantile(g, v, q, m):
 
 
 def crack_morphology(crack_labels, *, image=None, skeleton=None, background=None,
-                     crack_level=None, window_px=WINDOW_PX, link_px=LINK_PX):
+                     crack_level=None, window_px=WINDOW_PX, link_px=LINK_PX, area=None):
     """Morphology of every crack group, and of every skeleton pixel.
 
     Parameters
@@ -140,6 +147,8 @@ def crack_morphology(crack_labels, *, image=None, skeleton=None, background=None
         given: a grey closing over ``BACKGROUND_PX`` and the 2nd percentile of the cracks).
     window_px : int
     link_px : float
+    area : (n + 1,) ndarray of int, optional
+        Pixel count of each label (index = label, n the largest), when already at hand.
 
     Returns
     -------
@@ -157,7 +166,7 @@ def crack_morphology(crack_labels, *, image=None, skeleton=None, background=None
     from .._kernels import skeleton_window_sums
     from ..skeleton import skeletonize
     lab = np.asarray(crack_labels)
-    n = int(lab.max())
+    n = int(lab.max()) if area is None else len(area) - 1
     F = np.full((n + 1, len(FEATURE_NAMES)), np.nan)
     empty = dict(rr=np.zeros(0, int), cc=np.zeros(0, int), group=np.zeros(0, int),
                  X=np.zeros((0, len(LOCAL_NAMES))))
@@ -165,11 +174,12 @@ def crack_morphology(crack_labels, *, image=None, skeleton=None, background=None
         return np.zeros(1, np.int64), F, empty
     mask = lab > 0
     skel = skeletonize(mask) if skeleton is None else (np.asarray(skeleton, bool) & mask)
-    group_of = crack_groups(lab, link_px=link_px)
-    grp = group_of[lab]
+    group_of = crack_groups(lab, link_px=link_px, area=area)
     rr, cc = np.nonzero(skel)
-    g = grp[rr, cc]
-    dist = cv2.distanceTransform(mask.astype(np.uint8), cv2.DIST_L2, cv2.DIST_MASK_5)
+    g = group_of[lab[rr, cc]]
+    mask8 = mask.view(np.uint8)
+    at = np.flatnonzero(mask)        # the mask pixels, raster order
+    dist = cv2.distanceTransform(mask8, cv2.DIST_L2, cv2.DIST_MASK_5)
     ap = np.maximum(2.0 * dist[rr, cc] - 1.0, 1.0).astype(np.float64)
     ap_img = np.zeros(lab.shape, np.float64)
     ap_img[rr, cc] = ap
@@ -181,15 +191,15 @@ def crack_morphology(crack_labels, *, image=None, skeleton=None, background=None
             background = cv2.morphologyEx(grey, cv2.MORPH_CLOSE, k)
         core = float(crack_level) if crack_level is not None and np.isfinite(crack_level) \
             else float(np.percentile(grey[mask], 2))
-        bg = np.asarray(background, np.float32)[mask]
-        dark[mask] = np.clip((bg - grey[mask]) / np.maximum(bg - core, 1e-6), 0, 1)
+        bg = np.asarray(background, np.float32).ravel()[at]
+        dark.ravel()[at] = np.clip((bg - grey.ravel()[at]) / np.maximum(bg - core, 1e-6), 0, 1)
     sk8 = skel.astype(np.uint8)
     nb = cv2.filter2D(sk8, cv2.CV_16S, np.ones((3, 3), np.float32),
                       borderType=cv2.BORDER_CONSTANT) - sk8
     ends = (skel & (nb <= 1)).astype(np.uint8)
     w = int(window_px)
     win = np.empty((rr.size, 11))
-    skeleton_window_sums(sk8, ap_img, mask.astype(np.uint8), ends, dark, rr.astype(np.int64),
+    skeleton_window_sums(sk8, ap_img, mask8, ends, dark, rr.astype(np.int64),
                          cc.astype(np.int64), w // 2, win)
     s0, sx, sy, sxx, syy, sxy, sa, saa, sm, se, sd = win.T
     mx, my = sx / s0, sy / s0
@@ -227,8 +237,8 @@ def crack_morphology(crack_labels, *, image=None, skeleton=None, background=None
     F[:, 10] = gmean((ap >= WIDE_PX).astype(float))
     F[:, 11] = np.log(np.maximum(cnt, 1))
     if image is not None:
-        gm = grp[mask]
-        F[:, 8] = np.bincount(gm, weights=dark[mask], minlength=m) / np.maximum(
+        gm = group_of[lab.ravel()[at]]
+        F[:, 8] = np.bincount(gm, weights=dark.ravel()[at], minlength=m) / np.maximum(
             np.bincount(gm, minlength=m), 1)
     F[cnt == 0] = np.nan
     return group_of, F, dict(rr=rr, cc=cc, group=g, X=L)

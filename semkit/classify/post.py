@@ -65,6 +65,16 @@ def classify_post(crack_labels, *, image=None, skeleton=None, background=None,
     >>> t.loc[0, "type_post"], bool(t.loc[0, "type_post_ok"])
     ('tensile', True)
     """
+    table, code = _post_table(crack_labels, image=image, skeleton=skeleton,
+                              background=background, crack_level=crack_level, model=model)
+    lab = np.asarray(crack_labels)
+    return table, code[lab] if len(table) else np.zeros(lab.shape, np.int8)
+
+
+def _post_table(crack_labels, *, image=None, skeleton=None, background=None, crack_level=None,
+                model=None):
+    """:func:`classify_post`'s table, and the type code (int8) of every label instead of the
+    type image (the classification stage needs no image)."""
     model = DEFAULT_POST_MODEL if model is None else model
     if model is None:
         raise InputError("crack model: no built-in model found; pass one from "
@@ -72,12 +82,19 @@ def classify_post(crack_labels, *, image=None, skeleton=None, background=None,
     lab = np.asarray(crack_labels)
     if lab.ndim != 2:
         raise InputError(f"crack_labels: expected a 2-D array, got shape {lab.shape}")
-    type_img = np.zeros(lab.shape, np.int8)
-    ids = np.unique(lab[lab > 0])
+    area = None
+    if lab.dtype in (np.int32, np.int64) and lab.size and lab.min() >= 0:
+        from .._kernels import label_counts
+        area = np.zeros(int(lab.max()) + 1, np.int64)
+        label_counts(np.ascontiguousarray(lab), area)
+        ids = np.flatnonzero(area[1:]) + 1
+    else:
+        ids = np.unique(lab[lab > 0])
     if ids.size == 0:
-        return pd.DataFrame(columns=["crack_id", *POST_COLUMNS]), type_img
+        return pd.DataFrame(columns=["crack_id", *POST_COLUMNS]), np.zeros(1, np.int8)
     group_of, F, local = crack_morphology(lab, image=image, skeleton=skeleton,
-                                          background=background, crack_level=crack_level)
+                                          background=background, crack_level=crack_level,
+                                          area=area)
     groups = np.unique(group_of[ids])
     D = group_design(F, local, model)[groups]
     Fg = F[groups]
@@ -93,9 +110,8 @@ def classify_post(crack_labels, *, image=None, skeleton=None, background=None,
     k = P.argmax(axis=1)
     at = np.searchsorted(groups, group_of[ids])
     kg = k[at]
-    code = np.zeros(int(lab.max()) + 1, np.int8)
+    code = np.zeros(int(ids[-1]) + 1, np.int8)
     code[ids] = kg + 1
-    type_img = code[lab]
     pg = P[at]
     ok = notes[at] == ""
     onehot = np.eye(3)[kg]
@@ -108,4 +124,4 @@ def classify_post(crack_labels, *, image=None, skeleton=None, background=None,
         "group_id": group_of[ids].astype(int), "p_mean": D[at, len(FEATURE_NAMES)]})
     for j, name in enumerate(FEATURE_NAMES):
         table[name] = Fg[at, j]
-    return table, type_img
+    return table, code

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..damage_areas import typed_areas
-from .post import POST_COLUMNS, classify_post
+from .post import POST_COLUMNS, _post_table
 from .pre import classify_pre
 
 __all__ = ["classify_stage"]
@@ -58,8 +58,8 @@ def classify_stage(cracks, crack_labels, *, grey=None, pixel_size_um=1.0, model=
         out["confidence_pre"] = t["confidence"].to_numpy()
         out["confidence"] = out["confidence_pre"]
     if post and len(out):
-        t, _ = classify_post(lab, image=grey, skeleton=skeleton, background=background,
-                             crack_level=crack_level, model=model)
+        t, _ = _post_table(lab, image=grey, skeleton=skeleton, background=background,
+                           crack_level=crack_level, model=model)
         t = t.set_index("crack_id").reindex(ids)
         for c in POST_COLUMNS:
             out[c] = t[c].to_numpy()

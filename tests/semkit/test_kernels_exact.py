@@ -1,0 +1,69 @@
+"""Kernels that fuse NumPy expressions give NumPy's bits."""
+import numpy as np
+
+from semkit import _kernels
+
+
+def test_ridge_levels_equal_numpy_expressions():
+    rng = np.random.default_rng(7)
+    a = rng.uniform(0, 255, (64, 80)).astype(np.float32)
+    bg = (a + rng.uniform(-5, 40, a.shape)).astype(np.float32)
+    bg[::7, ::5] = 30.0005          # at the 1e-3 floor of the contrast
+    r = rng.gamma(1.0, 3.0, a.shape).astype(np.float32)
+    region = rng.random(a.shape) > 0.1
+    crack_level, noise, high, low_snr, min_depth = 30.0, 0.731, 8.0, 4.0, 0.2
+    depth = (bg - a) / np.maximum(bg - crack_level, 1e-3)
+    snr = r / noise
+    seed = (snr > high) & (depth > min_depth) & region
+    low = (snr > low_snr) & (depth > 0.5 * min_depth) & region
+    d2, s2, l2 = np.empty_like(a), np.empty(a.shape, bool), np.empty(a.shape, bool)
+    f = np.float32
+    _kernels.ridge_levels(a, bg, r, f(crack_level), f(noise), f(high), f(low_snr),
+                          f(min_depth), f(0.5 * min_depth), region, d2, s2, l2)
+    assert np.array_equal(depth, d2)
+    assert np.array_equal(seed, s2) and np.array_equal(low, l2)
+
+
+def test_partial_volume_area_kernel_equals_numpy_path():
+    import cv2
+
+    from semkit.measure import label_cracks, partial_volume_area
+    rng = np.random.default_rng(3)
+    m = cv2.dilate((rng.random((90, 120)) > 0.97).view(np.uint8), np.ones((2, 3), np.uint8))
+    lab, n = label_cracks(m.astype(bool))
+    img = rng.uniform(20, 200, lab.shape).astype(np.float32)
+    bg = (img + rng.uniform(-10, 60, lab.shape)).astype(np.float32)
+    for ids in (None, np.arange(1, n + 1, 3)):
+        for rim in (0, 1, 2):
+            fast = partial_volume_area(img, lab, n, background=bg, crack_level=25.0,
+                                       rim_px=rim, ids=ids)
+            ref = partial_volume_area(img, lab, n, background=bg,
+                                      crack_level=np.float64(25.0), rim_px=rim, ids=ids)
+            # the float64 crack level takes the NumPy path in float64: compare to float32 math
+            lab32 = lab if ids is None else np.where(np.isin(lab, ids), lab, 0)
+            labf = lab32.astype(np.float32)
+            if rim:
+                k = np.ones((2 * rim + 1,) * 2, np.uint8)
+                labf = np.where(labf > 0, labf, cv2.dilate(labf, k))
+            idx = np.flatnonzero(labf.ravel())
+            cov = np.clip((bg.ravel()[idx] - img.ravel()[idx])
+                          / np.maximum(bg.ravel()[idx] - 25.0, 1e-3), 0.0, 1.0)
+            want = np.bincount(labf.ravel()[idx].astype(np.int64), cov, minlength=n + 1)
+            assert np.array_equal(fast, want)
+            assert np.allclose(ref, want, rtol=1e-5)
+
+
+def test_crack_candidates_equal_numpy_expression_for_both_scalar_kinds():
+    from semkit.threshold import _operand
+    rng = np.random.default_rng(11)
+    img = rng.uniform(0, 200, (70, 90)).astype(np.float32)
+    closed = (img + rng.uniform(0, 30, img.shape)).astype(np.float32)
+    for mineral, crack in ((120.3, 41.7), (np.float64(120.3), np.float64(41.7)),
+                           (np.float32(120.3), 41.7)):
+        dark, kmin, frac = mineral - 3.0 * 2.1, 4.0 * 1.3, 0.35
+        line = closed - img
+        want = (img < dark) | ((line > kmin) & (line > frac * (closed - crack)))
+        got = np.empty(img.shape, bool)
+        _kernels.crack_candidates(img, closed, _operand(dark), _operand(kmin), _operand(frac),
+                                  _operand(crack), got)
+        assert np.array_equal(got, want)
