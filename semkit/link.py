@@ -234,8 +234,13 @@ def _useful_pieces(detect, new, reach_px, min_px):
     keep = joins >= 2
     r = int(np.ceil(2 * min_px))
     h, w = detect.shape
+    ay, ax = np.nonzero(at)  # contact pixels (on an object), grouped by piece
+    al = grown[ay, ax]
+    order = np.argsort(al, kind="stable")
+    ay, ax, al = ay[order], ax[order], al[order]
     for i in np.flatnonzero(reach & ~keep):
-        cy, cx = np.nonzero(at & (grown == i))  # contact pixels (on the object)
+        lo, hi = np.searchsorted(al, i), np.searchsorted(al, i, side="right")
+        cy, cx = ay[lo:hi], ax[lo:hi]
         if not len(cy):
             continue
         obj = dlab[cy[0], cx[0]]
@@ -265,6 +270,18 @@ def _short_chains(detect, new, min_px):
     return new & short[lab]
 
 
+def _label_quantile(values, labels, n, q):
+    """Per label 1..n-1: the ``q`` quantile of ``values`` (the lower one; NaN when empty)."""
+    order = np.lexsort((values, labels))  # by label, then value
+    lv, vv = labels[order], values[order]
+    idx = np.arange(1, n)
+    lo, hi = np.searchsorted(lv, idx), np.searchsorted(lv, idx, side="right")
+    out = np.full(len(idx), np.nan)
+    has = hi > lo
+    out[has] = vv[lo[has] + np.floor(q * (hi[has] - lo[has] - 1)).astype(np.int64)]
+    return out
+
+
 def _shallow_pieces(new, detect, grey, crack_level, min_depth):
     """``new`` pieces (8-connected) whose median grey is less than ``min_depth`` of the
     contrast below the *darker* side around them (the 25th percentile of a ring 2-3 px out,
@@ -272,7 +289,6 @@ def _shallow_pieces(new, detect, grey, crack_level, min_depth):
     rock on both sides; a faint boundary line, or the dark side of a step between two grains,
     is not (as ``side_depth`` in :mod:`semkit.reject`)."""
     import cv2
-    from scipy import ndimage as ndi
     n, lab = cv2.connectedComponents(new.view(np.uint8), connectivity=8)
     if n <= 1:
         return np.zeros(new.shape, bool)
@@ -282,10 +298,9 @@ def _shallow_pieces(new, detect, grey, crack_level, min_depth):
     inner = cv2.dilate(labf, np.ones((3, 3), np.uint8))
     near = cv2.dilate(detect.view(np.uint8), np.ones((5, 5), np.uint8)).view(bool)
     ring = (outer > 0) & (inner == 0) & ~near  # the objects' own blurred rims left out
-    idx = np.arange(1, n)
-    side = ndi.labeled_comprehension(g[ring], outer[ring].astype(np.int64), idx,
-                                     lambda v: np.percentile(v, 25), np.float64, np.nan)
-    core = np.asarray(ndi.median(g, lab, idx), np.float64)
+    side = _label_quantile(g[ring], outer[ring].astype(np.int64), n, 0.25)
+    on = lab > 0
+    core = _label_quantile(g[on], lab[on].astype(np.int64), n, 0.5)
     depth = (side - core) / np.maximum(side - float(crack_level), 1e-3)
     return np.concatenate([[False], depth < min_depth])[lab]  # NaN (no ring): kept
 
