@@ -27,8 +27,9 @@ MICROCT_LENGTH_TOL = 0.15
 MICROCT_AREA_RATIO_MAX = 2.0
 #: the issue's target, reached: < 10 % of a marked dark grain called crack
 GRANITE_DARK_GRAIN_MAX = 0.10
-#: measured: 3 of the 7 marked faint cracks found (the issue's target, 80 %, is not reached)
-GRANITE_FOUND_MIN = 3
+#: measured: 4 of the 7 marked faint cracks found (3 before the beaded-crack linking,
+#: semkit.link; the issue's target, 80 %, is not reached)
+GRANITE_FOUND_MIN = 4
 
 
 @pytest.fixture(scope="module")
