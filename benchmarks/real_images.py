@@ -12,6 +12,9 @@
   dark-grain pixels called crack; share of each marked faint crack's polyline within 3 px of a
   detected crack (found: >= 70 % of its length).
 
+Both are scored with the default options and again with ``link=True`` (``--link``: the
+opt-in linking of faint, beaded cracks, :mod:`semkit.link`).
+
 Writes ``benchmarks/semkit_results/real_images.json`` and prints markdown tables.
 
 Run: ``python benchmarks/real_images.py [--shared PATH]`` (default ``../shared/real_sem`` beside
@@ -112,6 +115,22 @@ def granite_scores(folder, marks=MARKS, **options):
                 rejected_as=a.rejected["rejected_as"].value_counts().to_dict())
 
 
+def _print_tables(label, ct, gr):
+    print(f"\n{label}\n\n| micro-CT slices | F1 median | precision | recall | "
+          "length ratio median | area ratio max | valid |")
+    print("|---|---|---|---|---|---|---|")
+    for k, v in ct.items():
+        print(f"| {k} | {v['f1_median']:.3f} | {v['precision_median']:.3f} | "
+              f"{v['recall_median']:.3f} | {v['length_ratio_median']:.3f} | "
+              f"{v['area_ratio_max']:.2f} | {v['valid']}/{v['n']} |")
+    print("\n| granite | value |\n|---|---|")
+    for k, v in gr["dark_grain_crack_fraction"].items():
+        print(f"| {k}: share called crack | {v:.1%} |")
+    print(f"| faint cracks found (>= {FOUND_COVERAGE:.0%} within {FOUND_TOL_PX:g} px) | "
+          f"{gr['n_found']} of {gr['n_marked']} "
+          f"({', '.join(f'{k} {v:.2f}' for k, v in gr['crack_coverage'].items())}) |")
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--shared", default=None, help="the real_sem folder")
@@ -125,23 +144,16 @@ def main(argv=None) -> int:
     d = microct_scores(base / "rock_microct_311H")
     ct = microct_summary(d)
     gr = granite_scores(base)
+    # the same with the (opt-in) linking of faint, beaded cracks
+    ct_link = microct_summary(microct_scores(base / "rock_microct_311H", link=True))
+    gr_link = granite_scores(base, link=True)
     out = pathlib.Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     (out / "real_images.json").write_text(json.dumps(dict(
-        microct=ct, microct_slices=d.round(4).to_dict("records"), granite=gr), indent=1))
-    print("| micro-CT slices | F1 median | precision | recall | length ratio median | "
-          "area ratio max | valid |")
-    print("|---|---|---|---|---|---|---|")
-    for k, v in ct.items():
-        print(f"| {k} | {v['f1_median']:.3f} | {v['precision_median']:.3f} | "
-              f"{v['recall_median']:.3f} | {v['length_ratio_median']:.3f} | "
-              f"{v['area_ratio_max']:.2f} | {v['valid']}/{v['n']} |")
-    print("\n| granite | value |\n|---|---|")
-    for k, v in gr["dark_grain_crack_fraction"].items():
-        print(f"| {k}: share called crack | {v:.1%} |")
-    print(f"| faint cracks found (>= {FOUND_COVERAGE:.0%} within {FOUND_TOL_PX:g} px) | "
-          f"{gr['n_found']} of {gr['n_marked']} "
-          f"({', '.join(f'{k} {v:.2f}' for k, v in gr['crack_coverage'].items())}) |")
+        microct=ct, microct_slices=d.round(4).to_dict("records"), granite=gr,
+        microct_linked=ct_link, granite_linked=gr_link), indent=1))
+    for label, c, g in (("default", ct, gr), ("with --link", ct_link, gr_link)):
+        _print_tables(label, c, g)
     return 0
 
 

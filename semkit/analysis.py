@@ -184,8 +184,58 @@ class CrackAnalysis:
                 from .ridge import add_ridge_lines
                 det, area = add_ridge_lines(det, area, *self.ridge,
                                             components=self._ridge_components)
+                if self.options.link:
+                    det, area = self._linked(det, area)
         inside = self.region.mask
         return det & inside, area & inside
+
+    #: stages the unlinked first pass shares with this analysis (all before detection)
+    _SHARED = ("region", "_work_image", "_flat_field", "smooth", "thresholded", "ridge")
+
+    @functools.cached_property
+    def unlinked(self):
+        """This analysis without linking (:mod:`semkit.link`): the first pass, whose accepted
+        objects seed the lines and whose rejected ones no line may join. Shares the stages
+        up to the ridge lines; None when nothing is linked."""
+        if not self.options.link or self.options.segmenter is not None or self.ridge is None:
+            return None
+        import dataclasses
+        first = CrackAnalysis.__new__(CrackAnalysis)
+        first.__dict__.update({k: v for k, v in self.__dict__.items()
+                               if not isinstance(getattr(CrackAnalysis, k, None),
+                                                 functools.cached_property)
+                               or k in self._SHARED})
+        first.options = dataclasses.replace(self.options, link=False)
+        return first
+
+    def _linked(self, det, area):
+        """``det, area`` with the lines (:func:`semkit.link.link_lines`) that continue or join
+        the first pass's accepted cracks. Objects it rejected for their own shape (and pores)
+        may be passed through; those rejected for their surroundings
+        (``LINK_EXCLUDE_RULES``) are kept ``LINK_EXCLUDE_PX`` away from."""
+        import cv2
+
+        from .link import add_link_lines, link_lines
+        first = self.unlinked
+        o = first._classified_objects
+        ids = o["crack_id"].to_numpy()
+        rej = o["rejected_as"].to_numpy()
+        kind = np.zeros(first.n_objects + 1, np.int8)  # 0 seed, 1 passable, 2 excluded
+        kind[ids[rej != ""]] = 1
+        if self.options.exclude_pores:
+            kind[ids[o["is_pore"].to_numpy(bool)]] = 1
+        kind[ids[np.isin(rej, config.LINK_EXCLUDE_RULES)]] = 2
+        objects = first.object_mask
+        k_obj = kind[first.labels]
+        excluded = objects & (k_obj == 2)
+        k = 2 * config.LINK_EXCLUDE_PX + 1
+        near = cv2.dilate(excluded.view(np.uint8), np.ones((k, k), np.uint8)).view(bool)
+        lines = link_lines(self.smooth, objects & (k_obj == 0),
+                           crack_level=self.thresholded.crack_level,
+                           passable=objects & (k_obj == 1), exclude=near,
+                           region=self.region.mask, detected=first.detection[0])
+        return add_link_lines(det, area, lines, self.smooth, self.ridge[1],
+                              crack_level=self.thresholded.crack_level)
 
     # stage 4
     @functools.cached_property

@@ -17,7 +17,7 @@ __all__ = ["main", "build_parser"]
 _ANALYSE_KEYS = ("threshold", "flatten", "denoise_sigma_px", "despeckle", "min_area_um2",
                  "max_hole_px", "length", "exclude_pores", "pixel_size_um", "jobs", "progress",
                  "overlays", "classify", "crack_model", "grains", "minerals", "classes",
-                 "labels", "roi", "ridge", "reject", "save_masks", "segmenter")
+                 "labels", "roi", "ridge", "link", "reject", "save_masks", "segmenter")
 
 
 def _version():
@@ -67,6 +67,11 @@ def _add_analyse(sub):
                         "white surround), none, or a mask image (non-zero = sample)")
     p.add_argument("--no-ridge", dest="ridge", action="store_false", default=None,
                    help="threshold only (no ridge detector for thin, faint cracks)")
+    p.add_argument("--link", dest="link", action="store_true", default=None,
+                   help="join the pieces of faint, beaded cracks along their lines (about "
+                        "doubles the CPU time)")
+    p.add_argument("--no-link", dest="link", action="store_false",
+                   help="do not link (the default)")
     p.add_argument("--no-reject", dest="reject", action="store_false", default=None,
                    help="keep dark objects the shape and surroundings rules would reject")
     p.add_argument("--save-masks", dest="save_masks", action="store_true", default=None,

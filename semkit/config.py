@@ -217,6 +217,42 @@ RIDGE_MIN_DEPTH_FRACTION = 0.2
 #: side of the grey closing giving the local background of a ridge, px
 RIDGE_CLOSING_PX = 9
 
+# --- linking of faint, beaded cracks (semkit.link) ---
+#: oriented line response: Gaussian scale across and along the line, px, and the number of
+#: directions over 180 degrees
+LINK_SIGMA_PX = 1.0
+LINK_LENGTH_PX = 8.0
+LINK_ORIENTATIONS = 12
+#: weight of the edge term of the line response (RIDGE_EDGE_KAPPA's counterpart)
+LINK_EDGE_KAPPA = 1.0
+#: a line continuing an accepted crack object passes this many noise units of that response
+#: (LINK_LENGTH_PX, LINK_SNR, LINK_MAX_DENSITY and LINK_MIN_CHAIN_PX chosen on the granite's
+#: marked cracks, micro-CT slices 1-10 and semkit.synth seeds 11-16; docs/semkit.md)
+LINK_SNR = 4.0
+#: objects rejected by these rules of the first pass (their surroundings say they are no
+#: crack) are kept out of linking; objects rejected for their own shape (phase_rim,
+#: compact_dark: a bead too round or short on its own) and pores may be passed through
+LINK_EXCLUDE_RULES = ("dark_phase", "mottled", "grain_rim")
+#: lines keep this far (px) from an excluded object (more than the 1-px gap that
+#: cleanup.bridge_gaps closes), so they never join one
+LINK_EXCLUDE_PX = 2
+#: line pixels lie at least this many pixel-noise sigmas below their local background (the
+#: elongated filter's response runs on past a crack's tip, over background)
+LINK_DEPTH_SIGMAS = 3.0
+#: a piece of line (between objects or beyond one) lies at least this share of the contrast
+#: below the darker side around it (median along the piece): the ridge's own low level
+#: (0.5 RIDGE_MIN_DEPTH_FRACTION), read along the piece instead of per pixel; a faint grain
+#: boundary of semkit.synth, or the dark side of a step between grains, is shallower
+LINK_MIN_DEPTH_FRACTION = 0.1
+#: a linked object must be at least this long (px; its principal length): two specks joined
+#: into a short squiggle are no crack
+LINK_MIN_CHAIN_PX = 30.0
+#: lines are drawn only where their brighter side is less than this share of the contrast
+#: brighter than the rock (a dark halo beside a bright grain or particle is its rim)
+LINK_MAX_LIFT = 0.3
+#: lines are drawn only where less than this share of a ZONE_WINDOW_PX window is detected
+LINK_MAX_DENSITY = 0.12
+
 # --- rejection of dark non-crack objects (semkit.reject) ---
 #: a crack lies at least this far (share of the contrast) below the darker side around it
 REJECT_SIDE_DEPTH = 0.3

@@ -48,6 +48,9 @@ class AnalysisOptions:
     ridge : bool
         Fuse the ``auto`` threshold with the multi-scale ridge detector (thin, faint cracks;
         :mod:`semkit.ridge`).
+    link : bool
+        Join the pieces of faint, beaded cracks with an oriented line response, from the
+        objects a first pass accepted (:mod:`semkit.link`; needs ``ridge``).
     reject : bool
         Reject dark objects that are not cracks by shape and surroundings
         (:mod:`semkit.reject`); they stay in ``cracks.csv`` with ``rejected_as``.
@@ -74,6 +77,7 @@ class AnalysisOptions:
     minerals: str | None = None
     roi: str = "auto"
     ridge: bool = True
+    link: bool = False
     reject: bool = True
     segmenter: object = None
 

@@ -27,8 +27,10 @@ MICROCT_LENGTH_TOL = 0.15
 MICROCT_AREA_RATIO_MAX = 2.0
 #: the issue's target, reached: < 10 % of a marked dark grain called crack
 GRANITE_DARK_GRAIN_MAX = 0.10
-#: measured: 3 of the 7 marked faint cracks found (the issue's target, 80 %, is not reached)
+#: measured: 3 of the 7 marked faint cracks found by default, 4 with the opt-in linking of
+#: beaded cracks (semkit.link, ``--link``); the issue's target, 80 %, is not reached
 GRANITE_FOUND_MIN = 3
+GRANITE_FOUND_MIN_LINKED = 4
 
 
 @pytest.fixture(scope="module")
@@ -63,3 +65,7 @@ def test_granite_dark_grains_and_faint_cracks():
         assert frac < GRANITE_DARK_GRAIN_MAX, (name, frac)
     assert g["n_found"] >= GRANITE_FOUND_MIN, g["crack_coverage"]
     assert {"dark_phase", "mottled"} <= set(g["rejected_as"])
+    linked = real.granite_scores(SHARED, link=True)
+    for name, frac in linked["dark_grain_crack_fraction"].items():
+        assert frac < GRANITE_DARK_GRAIN_MAX, (name, frac)
+    assert linked["n_found"] >= GRANITE_FOUND_MIN_LINKED, linked["crack_coverage"]

@@ -4,8 +4,8 @@ import importlib
 
 import pytest
 
-MODULES = ["io", "illumination", "threshold", "cleanup", "skeleton", "measure", "analysis",
-           "synth"]
+MODULES = ["io", "illumination", "threshold", "ridge", "link", "cleanup", "skeleton", "measure",
+           "analysis", "synth"]
 
 
 @pytest.mark.parametrize("name", MODULES)
