@@ -8,6 +8,7 @@ beside what this model gives, and whether they agree; nothing is adjusted to agr
 """
 from __future__ import annotations
 
+import json
 import math
 import pathlib
 
@@ -21,10 +22,16 @@ from .study import (
     THESIS_CH6_ANGLE,
     THESIS_CH6_BRIDGE_R,
     THESIS_SIZE_MM,
+    _number,
     case_summary,
 )
 
-__all__ = ["findings", "draw_figures", "write_study_report", "seed_spread"]
+__all__ = ["findings", "draw_figures", "write_study_report", "seed_spread",
+           "representativeness_note"]
+
+#: what a finding says when the cases it compares have no valid value (E flagged invalid in
+#: every run of a case, say): no order is read from missing numbers
+_NO_VALID = "no valid values"
 
 _LABEL = {"ucs_mpa": "UCS (MPa)", "E_gpa": "E (GPa)", "nu": "Poisson's ratio",
           "hole_damage_damaged_area_mm2": "damaged area (mm²)",
@@ -100,7 +107,14 @@ def findings(name, frame):
     if name == "thesis-ch4-scenarios":
         base = s[s["scale"] == 1.0].sort_values("scenario")
         for metric in ("ucs_mpa", "E_gpa"):
-            order = base.sort_values(f"{metric}_mean")["scenario"].tolist()
+            valid = base.dropna(subset=[f"{metric}_mean"])
+            missing = sorted(set(base["scenario"]) - set(valid["scenario"]))
+            if missing or len(valid) < 2:
+                rows.append([f"{_LABEL[metric]} rises as MHI falls (S1 < S2 < S3 < S4)",
+                             "S1 < S2 < S3 < S4", _NO_VALID + " for "
+                             + ", ".join(f"S{k}" for k in missing or base["scenario"]), None])
+                continue
+            order = valid.sort_values(f"{metric}_mean")["scenario"].tolist()
             rows.append([f"{_LABEL[metric]} rises as MHI falls (S1 < S2 < S3 < S4)",
                          "S1 < S2 < S3 < S4", " < ".join(f"S{k}" for k in order),
                          order == sorted(order)])
@@ -110,16 +124,23 @@ def findings(name, frame):
             if len(one) and len(big):
                 d = float(big.iloc[0] - one.iloc[0])
                 rows.append([f"grain size x1.5 raises {_LABEL[metric]} (S1)", "raises",
-                             f"{d:+.1f}", d > 0])
+                             _NO_VALID if math.isnan(d) else f"{d:+.1f}",
+                             None if math.isnan(d) else d > 0])
+        _flag_one_seed(rows, frame)
     elif name == "thesis-ch4-grain-size":
         for sc, g in s.groupby("scenario"):
             g = g.sort_values("scale")
             for metric in ("ucs_mpa", "E_gpa"):
-                y = g[f"{metric}_mean"].to_numpy(float)
-                slope = np.polyfit(g["scale"].to_numpy(float), y, 1)[0] if len(y) > 1 \
-                    else float("nan")
-                rows.append([f"S{sc}: {_LABEL[metric]} rises with the grain-size scale",
-                             "rises", f"slope {slope:+.1f} per unit scale", bool(slope > 0)])
+                g_ok = g.dropna(subset=[f"{metric}_mean"])
+                label = f"S{sc}: {_LABEL[metric]} rises with the grain-size scale"
+                if len(g_ok) < 2:
+                    rows.append([label, "rises", _NO_VALID + " at two scales or more", None])
+                    continue
+                slope = np.polyfit(g_ok["scale"].to_numpy(float),
+                                   g_ok[f"{metric}_mean"].to_numpy(float), 1)[0]
+                rows.append([label, "rises", f"slope {slope:+.1f} per unit scale",
+                             bool(slope > 0)])
+        _flag_one_seed(rows, frame)
     elif name == "thesis-ch5-shapes":
         for shape, (word, ratio) in THESIS_CH5.items():
             g = s[s["shape"] == shape]
@@ -159,12 +180,42 @@ def findings(name, frame):
     return rows
 
 
+def representativeness_note(frame) -> str:
+    """One line saying how many finished runs are on specimens that fail the
+    representativeness rules (``representative_ok`` of the test summary), or ``""``.
+
+    Examples
+    --------
+    >>> import pandas as pd
+    >>> f = pd.DataFrame({"status": ["ok", "ok", "failed"],
+    ...                   "representative_ok": [False, True, None],
+    ...                   "representative_warnings": ['["3.2 grains across"]', "[]", None]})
+    >>> representativeness_note(f)
+    '1 of 2 finished runs are on specimens that fail the representativeness rules (e.g. 3.2 grains across): their numbers say little about the rock.'
+    """
+    ok = frame[frame["status"] == "ok"] if "status" in frame else frame
+    if "representative_ok" not in ok or len(ok) == 0:
+        return ""
+    bad = ok[ok["representative_ok"].map(_number) == 0]
+    if len(bad) == 0:
+        return ""
+    example = ""
+    if "representative_warnings" in bad:
+        try:
+            first = json.loads(str(bad["representative_warnings"].iloc[0]))
+            example = f" (e.g. {first[0]})" if first else ""
+        except ValueError:
+            example = ""
+    return (f"{len(bad)} of {len(ok)} finished runs are on specimens that fail the "
+            f"representativeness rules{example}: their numbers say little about the rock.")
+
+
 def _flag_one_seed(rows, frame):
     """With one seed the order of the cases has no seed spread to stand against: say so."""
     ok = frame[frame["status"] == "ok"] if "status" in frame else frame
     if "seed" in ok and ok["seed"].nunique() == 1:
         for r in rows:
-            if r[2] != "–":
+            if r[2] != "–" and r[3] is not None and "one seed" not in str(r[2]):
                 r[2] = f"{r[2]} (one seed: no seed spread, the order may be noise)"
 
 
@@ -306,6 +357,9 @@ def write_study_report(out, name, frame, *, seeds, size_mm, command="") -> tuple
              f"recorded, {n_ok} ok, {len(frame) - n_ok} failed.")
     if command:
         rep.text(f"Command: {command}", note=True)
+    warning = representativeness_note(frame)
+    if warning:
+        rep.text(warning)
     if name.startswith("thesis-ch6"):
         k = min(size_mm[0] / THESIS_SIZE_MM[0], size_mm[1] / THESIS_SIZE_MM[1])
         rep.text(f"Holes, bridges and grains at {k:g} x the thesis's (R = "

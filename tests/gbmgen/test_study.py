@@ -101,3 +101,46 @@ def test_print_sweep_is_a_sweep_file(tmp_path, capsys):
                                                                                          20)))]
     assert gbmsim(["study", "thesis-ch6-holes", "--seeds", "0", "--out", str(tmp_path)]) == 2
     assert "--seeds 0" in capsys.readouterr().err
+
+
+def test_findings_read_no_order_from_invalid_values():
+    """A case whose E is flagged invalid in every run has no E: the finding says so and
+    claims neither agreement nor disagreement (the order of missing numbers is no order)."""
+    nan = float("nan")
+    rows = [{"scenario": sc, "scale": scale, "seed": seed, "ucs_mpa": 100.0 + sc + seed,
+             "E_gpa": nan if sc in (2, 3) or scale == 1.5 else 60.0 + sc}
+            for sc, scale in ((1, 1.0), (2, 1.0), (3, 1.0), (4, 1.0), (1, 1.5))
+            for seed in (1, 2)]
+    f = {r[0]: r for r in findings("thesis-ch4-scenarios", _frame(rows))}
+    e_order = f["E (GPa) rises as MHI falls (S1 < S2 < S3 < S4)"]
+    assert e_order[2] == "no valid values for S2, S3" and e_order[3] is None
+    assert f["grain size x1.5 raises E (GPa) (S1)"][2:] == ["no valid values", None]
+    assert f["UCS (MPa) rises as MHI falls (S1 < S2 < S3 < S4)"][3] is True
+    grain = [{"scenario": 1, "scale": s, "seed": 1, "ucs_mpa": 100.0 * s,
+              "E_gpa": nan if s > 1 else 60.0} for s in (1.0, 1.25, 1.5)]
+    g = {r[0]: r for r in findings("thesis-ch4-grain-size", _frame(grain))}
+    assert g["S1: E (GPa) rises with the grain-size scale"][3] is None
+    assert g["S1: UCS (MPa) rises with the grain-size scale"][3] is True
+
+
+def test_study_end_to_end_on_tiny_specimens(tmp_path):
+    """`gbmsim study` runs its five Ch. 4 cases for real (2.5 x 5 mm, ~320 particles), writes
+    the table, the figure and the report, and says that such specimens are not
+    representative; findings claim nothing from values flagged invalid."""
+    out = tmp_path / "st"
+    assert gbmsim(["study", "thesis-ch4-scenarios", "--seeds", "1", "--size-mm", "2.5", "5",
+                   "--out", str(out), "--workers", "0", "--no-progress"]) == 0
+    frame = pd.read_csv(out / "results.csv")
+    assert len(frame) == 5 and (frame["status"] == "ok").all()
+    assert sorted(zip(frame["scenario"], frame["scale"])) == [(1, 1.0), (1, 1.5), (2, 1.0),
+                                                             (3, 1.0), (4, 1.0)]
+    assert (frame["ucs_mpa"] > 0).all() and not frame["representative_ok"].any()
+    md = (out / "report.md").read_text()
+    assert "fail the representativeness rules" in md and "Findings beside the thesis" in md
+    png = out / "report_files" / "thesis-ch4-scenarios.png"
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert (out / "report.html").stat().st_size > png.stat().st_size
+    rows = {r[0]: r for r in findings("thesis-ch4-scenarios", frame)}
+    e_row = rows["E (GPa) rises as MHI falls (S1 < S2 < S3 < S4)"]
+    by_case = frame[frame["scale"] == 1.0].groupby("scenario")["E_ok"].any()
+    assert (e_row[3] is None) == (not by_case.all())
