@@ -22,6 +22,7 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = ["GAUGE_FRACTION", "gauge_indices", "gauge_box", "side_indices", "end_indices",
+           "bonded_only",
            "gauge_strains", "layer_strain", "cell_area", "gauge_stress", "crack_crosses"]
 
 #: The strain gauge is the central region spanning these fractions of the width and height.
@@ -90,6 +91,33 @@ def end_indices(y, r, box, *, depth=None):
     top faces: the layers the platens touch."""
     d = 0.25 * float(np.mean(r)) if depth is None else depth
     return np.nonzero(y - r <= box[2] + d)[0], np.nonzero(y + r >= box[3] - d)[0]
+
+
+def bonded_only(specimen, *layers):
+    """The particles of each layer that hold a bond at generation.
+
+    An unbonded particle in a boundary layer is not tied to the specimen: pressed by a platen
+    it slips into the packing (one corner particle of a 10 x 20 mm specimen moved 41 um while
+    the platen moved 12 um), and a layer's mean position then reads a strain the specimen does
+    not have. A specimen without bonds, or a layer with no bonded particle, keeps its layers.
+
+    Examples
+    --------
+    >>> from types import SimpleNamespace
+    >>> s = SimpleNamespace(bond_i=np.array([0, 1]), bond_j=np.array([1, 3]))
+    >>> [a.tolist() for a in bonded_only(s, np.array([0, 2]), np.array([2]))]
+    [[0], [2]]
+    """
+    bonded = np.zeros(int(max([np.max(a, initial=-1) for a in layers]
+                              + [np.max(specimen.bond_j, initial=-1)])) + 1, bool)
+    bonded[np.asarray(specimen.bond_i, int)] = True
+    bonded[np.asarray(specimen.bond_j, int)] = True
+    out = []
+    for idx in layers:
+        idx = np.asarray(idx)
+        kept = idx[bonded[idx]]
+        out.append(kept if kept.size else idx)
+    return tuple(out)
 
 
 def gauge_strains(x0, y0, x, y, idx):

@@ -78,6 +78,7 @@ def compression_rig(specimen, x0, y0, box):
     area = gg.cell_area(x0, y0, gauge)
     left, right = gg.side_indices(x0, specimen.r, box)
     bottom, top = gg.end_indices(y0, specimen.r, box)
+    left, right, bottom, top = gg.bonded_only(specimen, left, right, bottom, top)
     gbox = gg.gauge_box(box, margin=margin)
     link = 2.1 * float(specimen.r.max())
 
