@@ -13,10 +13,7 @@ from ..errors import InputError
 __all__ = ["mineral_phases", "phase_separability"]
 
 PHASE_MEDIAN_PX = config.PHASE_MEDIAN_PX
-PHASE_MEDIAN_PX = config.PHASE_MEDIAN_PX
 PHASE_SIGMA_PX = config.PHASE_SIGMA_PX
-PHASE_SIGMA_PX = config.PHASE_SIGMA_PX
-GMM_ITERATIONS = config.GMM_ITERATIONS
 GMM_ITERATIONS = config.GMM_ITERATIONS
 
 

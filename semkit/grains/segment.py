@@ -12,12 +12,8 @@ from .phases import _as_grey, _smooth_masked
 __all__ = ["segment_grains"]
 
 GRAIN_DENOISE_SIGMA_PX = config.GRAIN_DENOISE_SIGMA_PX
-GRAIN_DENOISE_SIGMA_PX = config.GRAIN_DENOISE_SIGMA_PX
-RIDGE_SIGMA_PX = config.RIDGE_SIGMA_PX
 RIDGE_SIGMA_PX = config.RIDGE_SIGMA_PX
 MARKER_H_PX = config.MARKER_H_PX
-MARKER_H_PX = config.MARKER_H_PX
-BOUNDARY_LEVEL = config.BOUNDARY_LEVEL
 BOUNDARY_LEVEL = config.BOUNDARY_LEVEL
 
 

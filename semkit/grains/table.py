@@ -12,7 +12,6 @@ from ..errors import InputError
 __all__ = ["slenderness", "grain_table", "grain_size_table", "parse_classes"]
 
 AUTO_CLASS_PERCENTILES = config.AUTO_CLASS_PERCENTILES
-AUTO_CLASS_PERCENTILES = config.AUTO_CLASS_PERCENTILES
 
 
 def slenderness(grain_mask):
