@@ -108,16 +108,9 @@ def bonded_only(specimen, *layers):
     >>> [a.tolist() for a in bonded_only(s, np.array([0, 2]), np.array([2]))]
     [[0], [2]]
     """
-    bonded = np.zeros(int(max([np.max(a, initial=-1) for a in layers]
-                              + [np.max(specimen.bond_j, initial=-1)])) + 1, bool)
-    bonded[np.asarray(specimen.bond_i, int)] = True
-    bonded[np.asarray(specimen.bond_j, int)] = True
-    out = []
-    for idx in layers:
-        idx = np.asarray(idx)
-        kept = idx[bonded[idx]]
-        out.append(kept if kept.size else idx)
-    return tuple(out)
+    bonded = np.union1d(specimen.bond_i, specimen.bond_j)
+    kept = [np.asarray(idx)[np.isin(idx, bonded)] for idx in layers]
+    return tuple(k if k.size else np.asarray(idx) for k, idx in zip(kept, layers))
 
 
 def gauge_strains(x0, y0, x, y, idx):
