@@ -36,13 +36,16 @@ def markdown_table(rows):
         th = THESIS.get(sc) if scale == 1.0 else None
         lines.append(f"| S{sc} | ×{scale:g} | {np.mean(m) if m else float('nan'):.2f} | "
                      f"{g:.0f} | {np.mean(jf) if jf else float('nan'):.2f} | "
-                     f"{u.mean():.1f} ± {u.std(ddof=1) if len(u) > 1 else 0:.1f} | "
-                     + (f"{e.mean():.1f} ± {e.std(ddof=1) if len(e) > 1 else 0:.1f}"
-                        if len(e) else "–")
+                     f"{_mean_sd(u)} | " + (_mean_sd(e) if len(e) else "–")
                      + (f" ({len(r) - len(e)} invalid)" if len(e) < len(r) else "") + " | "
                      + (f"{th[0][0]}–{th[0][1]} | {th[1][0]}–{th[1][1]}" if th else "– | –")
                      + f" | {len(r)} |")
     return "\n".join(lines) + "\n"
+
+
+def _mean_sd(v):
+    """``"mean ± sd"`` over the seeds; the mean alone for one value (no sd to show)."""
+    return f"{v.mean():.1f} ± {v.std(ddof=1):.1f}" if len(v) > 1 else f"{v.mean():.1f}"
 
 
 def read_rows(paths):
