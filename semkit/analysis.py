@@ -121,7 +121,7 @@ class CrackAnalysis:
         if r.fraction >= 1.0:
             return self.image
         out = fill_outside(self.image, r.mask)
-        if self.image.dtype.kind in "ui":  # same dtype: a segmenter scales by the dtype range
+        if self.image.dtype.kind in "ui":  # keep the input dtype
             out = np.rint(out).astype(self.image.dtype)
         return out
 
@@ -175,7 +175,9 @@ class CrackAnalysis:
         lines, or the segmenter's decision when one is given; nothing outside the region."""
         seg = self.options.segmenter
         if seg is not None:
-            p = seg.crack_probability(self._work_image)
+            # the segmenter sees the image as it was trained on (surround unfilled: a filled
+            # surround shifts its wide-scale features tens of pixels into the sample)
+            p = seg.crack_probability(self.image)
             det = area = np.asarray(p) >= seg.threshold
         else:
             t = self.thresholded

@@ -160,3 +160,21 @@ def test_cli_train_segmenter(tmp_path, synth_pair):
     rc = main(["train-segmenter", str(tmp_path / "img"), "--labels", str(tmp_path / "lab"),
                "--out", str(out2), "--no-progress"])
     assert rc == 2 and not out2.exists()
+
+
+def test_analyse_applies_the_segmenter_to_the_image_it_was_trained_on(synth_pair, trained):
+    """With a black surround, ``analyse --segmenter`` decides on the unfilled image (as in
+    training) and keeps only the sample region; a filled surround would shift the wide-scale
+    features far into the sample and change the decision there."""
+    from semkit.analysis import analyse_image
+    _, b = synth_pair
+    img = b.image.copy()
+    yy, xx = np.mgrid[:img.shape[0], :img.shape[1]]
+    outside = (yy - 80) ** 2 + (xx - 100) ** 2 > 75 ** 2
+    img[outside] = 0
+    a = analyse_image(img, segmenter=trained)
+    assert 0.5 < a.region.fraction < 0.95
+    want = trained.crack_mask(img) & a.region.mask
+    np.testing.assert_array_equal(a.detection[0], want)
+    filled = trained.crack_mask(a._work_image) & a.region.mask
+    assert (filled != want).sum() > 0  # the test can tell the two apart
