@@ -1,0 +1,135 @@
+"""A calibrated preset on specimens it never saw: UCS, E, ν and σt per seed against the targets.
+
+For each seed the specimen is built as a user builds it, then loaded with the defaults::
+
+    gbmgen build --table table-4-1 --scenario 1 --width-mm W --height-mm H \\
+        --particle-radius-mm R --seed S --params PRESET --out OUT/sS.npz
+    gbmsim ucs OUT/sS.npz --out OUT/ucsS
+    gbmsim tension OUT/sS.npz --out OUT/tenS
+
+A seed whose specimen or summaries already exist is read back, not run again (an interrupted
+run continues where it stopped). Writes ``held_out.json`` (per seed: particles, UCS, E gauge
+and platen, ν, flags, σt, steps and wall time of each test) and prints a markdown table with
+the mean, the sample sd and each mean's error against the targets (REFERENCE.md: E 65 GPa,
+UCS 135 MPa, σt 18 MPa).
+
+    python benchmarks/preset_held_out.py --preset thesis-ch4-calibrated-25x50 --seeds 4,5,6 \\
+        --width-mm 25 --height-mm 50 --particle-radius-mm 0.1 --out DIR
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+
+import numpy as np
+
+#: Thesis laboratory targets (REFERENCE.md, Ch. 4).
+TARGETS = {"E_gpa": 65.0, "ucs_mpa": 135.0, "tensile_mpa": 18.0}
+
+
+def _run(args):
+    subprocess.run([sys.executable, "-m", *args, "--no-progress"], check=True)
+
+
+def _summary(folder):
+    path = os.path.join(folder, "summary.json")
+    if not os.path.exists(path):
+        return None
+    with open(path) as f:
+        return json.load(f)
+
+
+def run_seed(out, seed, *, preset, width_mm, height_mm, radius_mm):
+    """Build and test one seed (each step skipped when its output exists); its row."""
+    spec = os.path.join(out, f"s{seed}.npz")
+    if not os.path.exists(spec):
+        _run(["gbmgen.cli", "build", "--table", "table-4-1", "--scenario", "1",
+              "--width-mm", str(width_mm), "--height-mm", str(height_mm),
+              "--particle-radius-mm", str(radius_mm), "--seed", str(seed),
+              "--params", preset, "--out", spec])
+    ucs_dir, ten_dir = os.path.join(out, f"ucs{seed}"), os.path.join(out, f"ten{seed}")
+    if _summary(ucs_dir) is None:
+        _run(["sim", "ucs", spec, "--out", ucs_dir, "--no-figures"])
+    if _summary(ten_dir) is None:
+        _run(["sim", "tension", spec, "--out", ten_dir, "--no-figures"])
+    u, t = _summary(ucs_dir), _summary(ten_dir)
+    e = u.get("elastic", {})
+    return {"seed": seed, "n_particles": u.get("n_particles"), "ucs_mpa": u["ucs_mpa"],
+            "E_gpa": u["E_gpa"], "E_ok": u["E_ok"], "E_gauge_gpa": e.get("E_gauge_gpa"),
+            "E_platen_gpa": e.get("E_platen_gpa"), "nu": u["nu"], "nu_ok": u["nu_ok"],
+            "tensile_mpa": t["tensile_mpa"], "ucs_steps": u.get("steps"),
+            "ucs_wall_s": u.get("wall_s"), "tension_steps": t.get("steps"),
+            "tension_wall_s": t.get("wall_s"), "threads": u.get("threads")}
+
+
+def summarise(rows):
+    """Mean, sample sd and the mean's relative error per target (valid values only)."""
+    out = {}
+    for k, target in TARGETS.items():
+        v = np.array([r[k] for r in rows if r[k] is not None], float)
+        if len(v) == 0:
+            out[k] = {"n": 0}
+            continue
+        m = float(v.mean())
+        out[k] = {"n": int(len(v)), "mean": m, "sd": float(v.std(ddof=1)) if len(v) > 1 else None,
+                  "error": m / target - 1.0}
+    return out
+
+
+def table(rows, summary):
+    lines = ["| seed | particles | UCS MPa | E GPa (gauge; platen) | ν | σt MPa |",
+             "|---|---|---|---|---|---|"]
+    for r in rows:
+        e = "invalid" if r["E_gpa"] is None else f"{r['E_gpa']:.1f}"
+        nu = "invalid" if r["nu"] is None else f"{r['nu']:.3f}"
+        lines.append(f"| {r['seed']} | {r['n_particles']} | {r['ucs_mpa']:.1f} | {e} "
+                     f"({r['E_gauge_gpa']:.1f}; {r['E_platen_gpa']:.1f}) | {nu} | "
+                     f"{r['tensile_mpa']:.2f} |")
+
+    def cell(k, fmt):
+        s = summary[k]
+        if s["n"] == 0:
+            return "no valid value"
+        sd = "" if s["sd"] is None else f" ± {s['sd']:{fmt}}"
+        return f"{s['mean']:{fmt}}{sd} ({100 * s['error']:+.1f} %)"
+    lines.append(f"| **mean ± sd** | | {cell('ucs_mpa', '.1f')} | {cell('E_gpa', '.1f')} | | "
+                 f"{cell('tensile_mpa', '.2f')} |")
+    return "\n".join(lines)
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--preset", required=True)
+    ap.add_argument("--seeds", required=True, help="comma-separated seeds, e.g. 4,5,6")
+    ap.add_argument("--width-mm", type=float, default=25.0)
+    ap.add_argument("--height-mm", type=float, default=50.0)
+    ap.add_argument("--particle-radius-mm", type=float, default=0.1)
+    ap.add_argument("--out", required=True, help="working folder (specimens, test outputs)")
+    ap.add_argument("--json", default=None, help="result file (default OUT/held_out.json)")
+    args = ap.parse_args(argv)
+    os.makedirs(args.out, exist_ok=True)
+    seeds = [int(s) for s in args.seeds.split(",")]
+    rows = [run_seed(args.out, s, preset=args.preset, width_mm=args.width_mm,
+                     height_mm=args.height_mm, radius_mm=args.particle_radius_mm)
+            for s in seeds]
+    summary = summarise(rows)
+    build = (f"gbmgen build --table table-4-1 --scenario 1 --width-mm {args.width_mm:g} "
+             f"--height-mm {args.height_mm:g} --particle-radius-mm {args.particle_radius_mm:g} "
+             f"--seed S --params {args.preset} --out sS.npz")
+    result = {"preset": args.preset, "targets": TARGETS, "build": build,
+              "tests": ["gbmsim ucs sS.npz --out ucsS", "gbmsim tension sS.npz --out tenS"],
+              "load": os.getloadavg(), "held_out": rows, "summary": summary}
+    path = args.json or os.path.join(args.out, "held_out.json")
+    tmp = path + ".tmp"
+    with open(tmp, "w") as f:
+        json.dump(result, f, indent=1)
+    os.replace(tmp, path)
+    print(table(rows, summary))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
