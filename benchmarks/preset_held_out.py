@@ -10,8 +10,9 @@ For each seed the specimen is built as a user builds it, then loaded with the de
 A seed whose specimen or summaries already exist is read back, not run again (an interrupted
 run continues where it stopped). Writes ``held_out.json`` (per seed: particles, UCS, E gauge
 and platen, ν, flags, σt, steps and wall time of each test) and prints a markdown table with
-the mean, the sample sd and each mean's error against the targets (REFERENCE.md: E 65 GPa,
-UCS 135 MPa, σt 18 MPa).
+the mean, the sample sd and each mean's error against the calibration targets
+(``sim.calibrate.DEFAULT_TARGETS``, REFERENCE.md: E 65 GPa, UCS 135 MPa, σt 18 MPa); E and ν
+flagged invalid by the test are shown as such and left out of the means.
 
     python benchmarks/preset_held_out.py --preset thesis-ch4-calibrated-25x50 --seeds 4,5,6 \\
         --width-mm 25 --height-mm 50 --particle-radius-mm 0.1 --out DIR
@@ -26,8 +27,11 @@ import sys
 
 import numpy as np
 
-#: Thesis laboratory targets (REFERENCE.md, Ch. 4).
-TARGETS = {"E_gpa": 65.0, "ucs_mpa": 135.0, "tensile_mpa": 18.0}
+from sim.calibrate import DEFAULT_TARGETS
+
+#: The calibration targets in the units of the summaries.
+TARGETS = {"E_gpa": DEFAULT_TARGETS["E"] / 1e9, "ucs_mpa": DEFAULT_TARGETS["UCS"] / 1e6,
+           "tensile_mpa": DEFAULT_TARGETS["sigma_t"] / 1e6}
 
 
 def _run(args):
@@ -79,6 +83,10 @@ def summarise(rows):
     return out
 
 
+def _num(v, fmt):
+    return "–" if v is None else f"{v:{fmt}}"
+
+
 def table(rows, summary):
     lines = ["| seed | particles | UCS MPa | E GPa (gauge; platen) | ν | σt MPa |",
              "|---|---|---|---|---|---|"]
@@ -86,7 +94,7 @@ def table(rows, summary):
         e = "invalid" if r["E_gpa"] is None else f"{r['E_gpa']:.1f}"
         nu = "invalid" if r["nu"] is None else f"{r['nu']:.3f}"
         lines.append(f"| {r['seed']} | {r['n_particles']} | {r['ucs_mpa']:.1f} | {e} "
-                     f"({r['E_gauge_gpa']:.1f}; {r['E_platen_gpa']:.1f}) | {nu} | "
+                     f"({_num(r['E_gauge_gpa'], '.1f')}; {_num(r['E_platen_gpa'], '.1f')}) | {nu} | "
                      f"{r['tensile_mpa']:.2f} |")
 
     def cell(k, fmt):
@@ -94,7 +102,8 @@ def table(rows, summary):
         if s["n"] == 0:
             return "no valid value"
         sd = "" if s["sd"] is None else f" ± {s['sd']:{fmt}}"
-        return f"{s['mean']:{fmt}}{sd} ({100 * s['error']:+.1f} %)"
+        n = f", {s['n']} valid of {len(rows)}" if s["n"] < len(rows) else ""
+        return f"{s['mean']:{fmt}}{sd} ({100 * s['error']:+.1f} %{n})"
     lines.append(f"| **mean ± sd** | | {cell('ucs_mpa', '.1f')} | {cell('E_gpa', '.1f')} | | "
                  f"{cell('tensile_mpa', '.2f')} |")
     return "\n".join(lines)
