@@ -46,7 +46,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 __all__ = ["Knob", "DEFAULT_KNOBS", "DEFAULT_TARGETS", "CalibrationResult", "calibrate",
-           "scale_parameters", "initial_jacobian", "project_jacobian"]
+           "correction_step", "scale_parameters", "initial_jacobian", "project_jacobian"]
 
 #: Thesis laboratory targets (REFERENCE.md), Pa.
 DEFAULT_TARGETS = {"E": 65e9, "UCS": 135e6, "sigma_t": 18e6}
@@ -202,6 +202,66 @@ def _errors(resp, targets):
     return {k: float(resp[k]) / v - 1.0 for k, v in targets.items()}
 
 
+def _newton_step(u, r, J, lo, hi, max_log_step):
+    """``clip(u - J⁺ r)``: one least-squares step in log variables, within the bounds."""
+    du = np.linalg.lstsq(J, -r, rcond=None)[0]
+    du = np.clip(du, -max_log_step, max_log_step)
+    return np.clip(u + du, lo, hi)
+
+
+def correction_step(responses, *, targets=None, knobs=DEFAULT_KNOBS, jacobian=None,
+                    max_log_step: float = math.log(4.0)) -> dict:
+    """Multipliers that move the mean of ``responses`` onto ``targets``: one step, not run.
+
+    The seed-mean correction of :func:`calibrate` on its own, for responses measured
+    elsewhere (for example a preset's results on specimens pooled from its calibration and
+    from a held-out check). The step is ``u = clip(-J⁺ log(mean / target))`` in log
+    multipliers, with the scaling-law Jacobian (:func:`initial_jacobian`) unless one is given.
+    It is a prediction: evaluate the scaled set on specimens it has not seen.
+
+    Parameters
+    ----------
+    responses : sequence of dict
+        One dict per specimen with (at least) the keys of ``targets``, SI units.
+    targets : dict, optional
+        Default :data:`DEFAULT_TARGETS`.
+    knobs : sequence of Knob
+    jacobian : (T, K) array_like, optional
+    max_log_step : float
+
+    Returns
+    -------
+    multipliers : dict
+        Knob name -> multiplier relative to the set the responses were measured at.
+
+    Examples
+    --------
+    >>> m = correction_step([{"E": 65e9, "UCS": 135e6, "sigma_t": 19e6},
+    ...                      {"E": 65e9, "UCS": 135e6, "sigma_t": 17.5e6}])
+    >>> {k: round(v, 4) for k, v in m.items()}
+    {'modulus': 1.0, 'tensile': 0.984, 'cohesion': 1.0069}
+    """
+    targets = dict(DEFAULT_TARGETS if targets is None else targets)
+    knobs = tuple(knobs)
+    _check(targets, knobs)
+    names = list(targets)
+    if len(responses) == 0:
+        raise ValueError("'responses' is empty: expected one dict per specimen")
+    for i, resp in enumerate(responses):
+        bad = [k for k in names if not (k in resp and float(resp[k]) > 0)]
+        if bad:
+            raise ValueError(f"responses[{i}] has no positive '{bad[0]}' (expected {names})")
+    mean = np.array([[float(resp[k]) for k in names] for resp in responses]).mean(axis=0)
+    J = initial_jacobian(names, knobs) if jacobian is None else np.array(jacobian, float)
+    if J.shape != (len(names), len(knobs)):
+        raise ValueError(f"'jacobian' has shape {J.shape}, expected {(len(names), len(knobs))}")
+    lo = np.log([k.bounds[0] for k in knobs])
+    hi = np.log([k.bounds[1] for k in knobs])
+    u = _newton_step(np.zeros(len(knobs)), np.log(mean / np.array([targets[k] for k in names])),
+                     J, lo, hi, max_log_step)
+    return {k.name: float(m) for k, m in zip(knobs, np.exp(u))}
+
+
 def _check(targets, knobs):
     if not targets:
         raise ValueError("'targets' is empty: expected e.g. {'E': 65e9, 'UCS': 135e6}")
@@ -302,9 +362,7 @@ def calibrate(evaluate, params: dict, *, targets=None, knobs=DEFAULT_KNOBS, tol:
         return np.log(np.maximum(v, 1e-300) / tvec)
 
     def step(u, r, J):
-        du = np.linalg.lstsq(J, -r, rcond=None)[0]
-        du = np.clip(du, -max_log_step, max_log_step)
-        return np.clip(u + du, lo, hi)
+        return _newton_step(u, r, J, lo, hi, max_log_step)
 
     u = np.zeros(len(knobs))
     best = None

@@ -157,3 +157,30 @@ def test_a_worse_correction_round_is_not_kept():
     assert abs(res.final_errors["E"]) == pytest.approx(0.03, rel=0.1)   # the first round
     assert res.seed_summary["E"]["mean"] == pytest.approx(
         _surrogate(res.params, 1.03)["E"], rel=1e-12)
+
+
+def test_correction_step_lands_a_scaling_law_model_on_the_targets():
+    """Responses that follow the scaling laws exactly (E ∝ m, UCS ∝ t^0.3 c^0.7,
+    σt ∝ t^0.9 c^0.1) are put on the targets by one step, whatever the scatter between
+    specimens; the step is the one calibrate's seed round takes (same Newton step)."""
+    def model(m, t, c, f):
+        return {"E": 63e9 * m * f, "UCS": 132e6 * t ** 0.3 * c ** 0.7 * f,
+                "sigma_t": 19.5e6 * t ** 0.9 * c ** 0.1 / f}
+    factors = [0.93, 1.0, 1.08]
+    mean_f = {k: np.mean([model(1, 1, 1, f)[k] for f in factors]) for k in TARGETS}
+    step = cal.correction_step([model(1, 1, 1, f) for f in factors])
+    after = {k: np.mean([model(step["modulus"], step["tensile"], step["cohesion"], f)[k]
+                         for f in factors]) for k in TARGETS}
+    for k in TARGETS:
+        assert after[k] == pytest.approx(TARGETS[k], rel=1e-9), k
+    assert step["modulus"] == pytest.approx(65e9 / mean_f["E"], rel=1e-12)
+    assert step["tensile"] < 1.0 < step["cohesion"]   # σt high, UCS low: trade tension for cohesion
+
+
+def test_correction_step_rejects_missing_or_bad_responses():
+    with pytest.raises(ValueError, match="empty"):
+        cal.correction_step([])
+    with pytest.raises(ValueError, match=r"responses\[1\].*sigma_t"):
+        cal.correction_step([{"E": 1e9, "UCS": 1e6, "sigma_t": 1e6}, {"E": 1e9, "UCS": 1e6}])
+    with pytest.raises(ValueError, match="shape"):
+        cal.correction_step([TARGETS], jacobian=np.eye(2))

@@ -1,0 +1,107 @@
+"""One correction step for a preset from its results pooled over many specimens.
+
+A calibration searched on a few specimens lands its mean on the targets; a held-out check
+(``benchmarks/preset_held_out.py``) may then show that those specimens were a low or high
+draw. This script pools every specimen measured at the preset (the seed rows of the
+calibration log and the held-out rows), takes the mean, and computes the calibration's own
+seed-mean correction (:func:`sim.calibrate.correction_step`, scaling-law Jacobian), so that
+the step rests on all the specimens rather than on the first few. The step is a prediction:
+check the corrected set on specimens neither the calibration nor the pooled mean used.
+
+Writes into ``--out``: ``start_params.yaml`` (the preset as it was), ``correction.json``
+(every response with its source, the mean, its errors, the multipliers) and
+``corrected_params.yaml`` (the preset times the multipliers, 6 significant digits), and prints
+a small table.
+
+    python benchmarks/preset_correction.py --preset thesis-ch4-calibrated-25x50 \\
+        --log benchmarks/ucs_results/calibration_25x50/mean_search/calibration_log.jsonl \\
+        --held-out benchmarks/ucs_results/calibration_25x50/mean_search/held_out.json \\
+        --out benchmarks/ucs_results/calibration_25x50/pooled_correction
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+
+import numpy as np
+
+from gbmgen.params import load_params
+from sim.calibrate import DEFAULT_KNOBS, DEFAULT_TARGETS, correction_step, scale_parameters
+from sim.protocols.outputs import write_json_atomic
+from sim.protocols.parameters import save_parameters
+
+
+def log_rows(path):
+    """Responses of the last seed round of a calibration log (its accepted point)."""
+    with open(path, encoding="utf-8") as f:
+        recs = [json.loads(line) for line in f if line.strip()]
+    seeds = [r for r in recs if r["phase"] == "seed"]
+    if not seeds:
+        raise SystemExit(f"{path}: no 'seed' records (expected a calibration log with seeds)")
+    last = max(r["iteration"] for r in seeds)
+    return [{"source": f"{path} (seed round {last}, specimen {r['seed']})",
+             **{k: r["responses"][k] for k in DEFAULT_TARGETS}}
+            for r in seeds if r["iteration"] == last]
+
+
+def held_out_rows(path):
+    """Responses of a ``preset_held_out.py`` result file (SI units)."""
+    with open(path, encoding="utf-8") as f:
+        data = json.load(f)
+    return [{"source": f"{path} (seed {r['seed']})", "E": r["E_gpa"] * 1e9,
+             "UCS": r["ucs_mpa"] * 1e6, "sigma_t": r["tensile_mpa"] * 1e6}
+            for r in data["held_out"]]
+
+
+def _six_digits(params):
+    """Every number of the mineral and joint tables to 6 significant digits."""
+    def r(t):
+        return {k: float(f"{v:.6g}") if isinstance(v, float) else v for k, v in t.items()}
+    return {**params, "minerals": {m: r(t) for m, t in params["minerals"].items()},
+            "joint": r(params["joint"])}
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--preset", required=True, help="preset name the responses were measured at")
+    ap.add_argument("--log", action="append", default=[], help="calibration_log.jsonl (repeat)")
+    ap.add_argument("--held-out", action="append", default=[], help="held_out.json (repeat)")
+    ap.add_argument("--out", required=True)
+    a = ap.parse_args(argv)
+    rows = [r for p in a.log for r in log_rows(p)] + [r for p in a.held_out
+                                                      for r in held_out_rows(p)]
+    if not rows:
+        raise SystemExit("no responses: give --log and/or --held-out")
+    p = load_params(a.preset)
+    start = {"minerals": p.minerals, "joint": p.joint}
+    mult = correction_step(rows)
+    names = list(DEFAULT_TARGETS)
+    vals = np.array([[r[k] for k in names] for r in rows])
+    mean = vals.mean(axis=0)
+    os.makedirs(a.out, exist_ok=True)
+    save_parameters(os.path.join(a.out, "start_params.yaml"), start,
+                    header=f"The preset {a.preset} as it was before the correction step.")
+    corrected = _six_digits(scale_parameters(start, DEFAULT_KNOBS,
+                                             [mult[k.name] for k in DEFAULT_KNOBS]))
+    save_parameters(os.path.join(a.out, "corrected_params.yaml"), corrected,
+                    header=f"{a.preset} times the correction multipliers "
+                           + ", ".join(f"{k} {v:.6g}" for k, v in mult.items()))
+    report = {"preset": a.preset, "targets": DEFAULT_TARGETS, "responses": rows,
+              "n": len(rows), "mean": dict(zip(names, mean.tolist())),
+              "sd": dict(zip(names, vals.std(axis=0, ddof=1).tolist() if len(rows) > 1
+                             else [0.0] * len(names))),
+              "rel_error_of_mean": {k: float(m / DEFAULT_TARGETS[k] - 1.0)
+                                    for k, m in zip(names, mean)},
+              "jacobian": "scaling laws (sim.calibrate.initial_jacobian)",
+              "multipliers": mult}
+    write_json_atomic(os.path.join(a.out, "correction.json"), report)
+    print(f"| {a.preset}, {len(rows)} specimens | mean | sd | error of mean |")
+    print("|---|---|---|---|")
+    for k, m, s in zip(names, mean, report["sd"].values()):
+        print(f"| {k} | {m:.4g} | {s:.3g} | {100 * (m / DEFAULT_TARGETS[k] - 1):+.1f} % |")
+    print("multipliers: " + ", ".join(f"{k} x {v:.6g}" for k, v in mult.items()))
+
+
+if __name__ == "__main__":
+    main()
