@@ -11,7 +11,8 @@ A seed whose specimen or summaries already exist is read back, not run again (an
 run continues where it stopped). Writes ``held_out.json`` (per seed: particles, UCS, E gauge
 and platen, ν, flags, σt, steps and wall time of each test) and prints a markdown table with
 the mean, the sample sd and each mean's error against the calibration targets
-(``sim.calibrate.DEFAULT_TARGETS``, REFERENCE.md: E 65 GPa, UCS 135 MPa, σt 18 MPa); E and ν
+(``sim.calibrate.DEFAULT_TARGETS``, REFERENCE.md: E 65 GPa, UCS 135 MPa, σt 18 MPa) with its
+standard error (sd / √n, relative to the target); E and ν
 flagged invalid by the test are shown as such and left out of the means.
 
     python benchmarks/preset_held_out.py --preset thesis-ch4-calibrated-25x50 --seeds 4,5,6 \\
@@ -78,8 +79,9 @@ def summarise(rows):
             out[k] = {"n": 0}
             continue
         m = float(v.mean())
-        out[k] = {"n": int(len(v)), "mean": m, "sd": float(v.std(ddof=1)) if len(v) > 1 else None,
-                  "error": m / target - 1.0}
+        sd = float(v.std(ddof=1)) if len(v) > 1 else None
+        out[k] = {"n": int(len(v)), "mean": m, "sd": sd, "error": m / target - 1.0,
+                  "error_se": None if sd is None else sd / np.sqrt(len(v)) / target}
     return out
 
 
@@ -102,8 +104,9 @@ def table(rows, summary):
         if s["n"] == 0:
             return "no valid value"
         sd = "" if s["sd"] is None else f" ± {s['sd']:{fmt}}"
+        se = "" if s.get("error_se") is None else f" ± {100 * s['error_se']:.1f}"
         n = f", {s['n']} valid of {len(rows)}" if s["n"] < len(rows) else ""
-        return f"{s['mean']:{fmt}}{sd} ({100 * s['error']:+.1f} %{n})"
+        return f"{s['mean']:{fmt}}{sd} ({100 * s['error']:+.1f}{se} %{n})"
     lines.append(f"| **mean ± sd** | | {cell('ucs_mpa', '.1f')} | {cell('E_gpa', '.1f')} | | "
                  f"{cell('tensile_mpa', '.2f')} |")
     return "\n".join(lines)

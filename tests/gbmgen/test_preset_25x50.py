@@ -7,7 +7,7 @@ import pytest
 import yaml
 
 from gbmgen.params import PRESETS, load_params
-from sim.calibrate import DEFAULT_KNOBS, scale_parameters
+from sim.calibrate import DEFAULT_KNOBS, correction_step, scale_parameters
 
 CAL = Path(__file__).resolve().parents[2] / "benchmarks" / "ucs_results" / "calibration_25x50"
 NAME = "thesis-ch4-calibrated-25x50"
@@ -39,21 +39,36 @@ def _assert_same(p, want):
 
 
 def test_preset_is_the_accepted_point_of_the_25x50_calibrations():
-    """The preset is the start file times the multipliers of the two logged searches (6
-    significant digits at each stage): the first on seed 1, the second on the mean of seeds
-    1-3 starting where the first stopped."""
+    """The preset is the start file times the multipliers of the three logged steps (6
+    significant digits at each stage): a search on seed 1, a search on the mean of seeds 1-3
+    starting where the first stopped, and one correction step on the pooled mean of seeds
+    1-9 (the second search's seed rows and the held-out seeds 4-9) at that point."""
     first = _scaled(yaml.safe_load((CAL / "start_params.yaml").read_text()),
                     _accepted(_log(CAL / "calibration_log.jsonl")))
     start2 = yaml.safe_load((CAL / "mean_search" / "start_params.yaml").read_text())
     _assert_same(start2, first)
     log2 = _log(CAL / "mean_search" / "calibration_log.jsonl")
-    want = _scaled(start2, _accepted(log2))
+    second = _scaled(start2, _accepted(log2))
     # the accepted point is the seed mean's: three seed rows at the same multipliers
     seeds = [e for e in log2 if e["phase"] == "seed"]
     assert len(seeds) == 3 and all(e["multipliers"] == _accepted(log2) for e in seeds)
+    # third step: the pooled responses are those of the log and of the held-out file, and
+    # the multipliers are the calibration's correction step on their mean
+    pooled = CAL / "pooled_correction"
+    start3 = yaml.safe_load((pooled / "start_params.yaml").read_text())
+    _assert_same(start3, second)
+    corr = json.loads((pooled / "correction.json").read_text())
+    held = json.loads((CAL / "mean_search" / "held_out.json").read_text())["held_out"]
+    want = ([[e["responses"][k] for k in ("E", "UCS", "sigma_t")] for e in seeds]
+            + [[h["E_gpa"] * 1e9, h["ucs_mpa"] * 1e6, h["tensile_mpa"] * 1e6] for h in held])
+    got = [[r[k] for k in ("E", "UCS", "sigma_t")] for r in corr["responses"]]
+    np.testing.assert_allclose(got, want, rtol=1e-12)
+    step = correction_step(corr["responses"])
+    assert step == pytest.approx(corr["multipliers"], rel=1e-12)
+    assert step["tensile"] == pytest.approx(0.946139, rel=1e-6)
     p = load_params(NAME)
     assert p.name == NAME and p.source == f"preset {NAME}"
-    _assert_same({"minerals": p.minerals, "joint": p.joint}, want)
+    _assert_same({"minerals": p.minerals, "joint": p.joint}, _scaled(start3, step))
 
 
 def test_preset_is_chosen_by_name_and_differs_from_the_10x20_one():
@@ -62,10 +77,10 @@ def test_preset_is_chosen_by_name_and_differs_from_the_10x20_one():
     ratio = {k: big.minerals["pyroxene"][k] / small.minerals["pyroxene"][k]
              for k in ("pb_emod", "pb_ten", "pb_coh")}
     # the 25 x 50 mm specimens needed stronger tension than the 10 x 20 mm ones, about the
-    # same moduli and cohesions (products of the two searches' multipliers)
-    assert ratio["pb_emod"] == pytest.approx(0.9668 * 1.02956, rel=1e-3)
-    assert ratio["pb_ten"] == pytest.approx(1.4783 * 0.940017, rel=1e-3)
-    assert ratio["pb_coh"] == pytest.approx(1.0420 * 0.960495, rel=1e-3)
+    # same moduli and cohesions (products of the three steps' multipliers)
+    assert ratio["pb_emod"] == pytest.approx(0.9668 * 1.02956 * 0.994907, rel=1e-3)
+    assert ratio["pb_ten"] == pytest.approx(1.4783 * 0.940017 * 0.946139, rel=1e-3)
+    assert ratio["pb_coh"] == pytest.approx(1.0420 * 0.960495 * 1.04, rel=1e-3)
     a = big.joint_arrays()                     # numeric joint stiffness: no radius needed
     assert np.isclose(a["sj_ks"][0], a["sj_kn"][0] / 2)
 
