@@ -33,25 +33,41 @@ from sim.protocols.parameters import save_parameters
 
 
 def log_rows(path):
-    """Responses of the last seed round of a calibration log (its accepted point)."""
+    """Responses of the accepted seed round of a calibration log.
+
+    :func:`sim.calibrate.calibrate` keeps the seed round whose mean has the smallest largest
+    relative error (a correction round that made the mean worse is not kept); the same rule
+    picks the round here.
+    """
     with open(path, encoding="utf-8") as f:
         recs = [json.loads(line) for line in f if line.strip()]
     seeds = [r for r in recs if r["phase"] == "seed"]
     if not seeds:
         raise SystemExit(f"{path}: no 'seed' records (expected a calibration log with seeds)")
-    last = max(r["iteration"] for r in seeds)
-    return [{"source": f"{path} (seed round {last}, specimen {r['seed']})",
+    rounds = sorted({r["iteration"] for r in seeds})
+
+    def worst(it):
+        rows = [r for r in seeds if r["iteration"] == it]
+        return max(abs(np.mean([r["responses"][k] for r in rows]) / DEFAULT_TARGETS[k] - 1.0)
+                   for k in DEFAULT_TARGETS)
+    best = min(rounds, key=worst)
+    return [{"source": f"{path} (seed round {best}, specimen {r['seed']})",
              **{k: r["responses"][k] for k in DEFAULT_TARGETS}}
-            for r in seeds if r["iteration"] == last]
+            for r in seeds if r["iteration"] == best]
 
 
 def held_out_rows(path):
     """Responses of a ``preset_held_out.py`` result file (SI units)."""
     with open(path, encoding="utf-8") as f:
         data = json.load(f)
-    return [{"source": f"{path} (seed {r['seed']})", "E": r["E_gpa"] * 1e9,
-             "UCS": r["ucs_mpa"] * 1e6, "sigma_t": r["tensile_mpa"] * 1e6}
-            for r in data["held_out"]]
+    rows = []
+    for r in data["held_out"]:
+        if r["E_gpa"] is None:
+            raise SystemExit(f"{path}: seed {r['seed']} has E flagged invalid (E_gpa null); "
+                             "expected valid E on every pooled specimen: leave it out")
+        rows.append({"source": f"{path} (seed {r['seed']})", "E": r["E_gpa"] * 1e9,
+                     "UCS": r["ucs_mpa"] * 1e6, "sigma_t": r["tensile_mpa"] * 1e6})
+    return rows
 
 
 def _six_digits(params):

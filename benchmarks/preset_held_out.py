@@ -12,8 +12,8 @@ run continues where it stopped). Writes ``held_out.json`` (per seed: particles, 
 and platen, ν, flags, σt, steps and wall time of each test) and prints a markdown table with
 the mean, the sample sd and each mean's error against the calibration targets
 (``sim.calibrate.DEFAULT_TARGETS``, REFERENCE.md: E 65 GPa, UCS 135 MPa, σt 18 MPa) with its
-standard error (sd / √n, relative to the target); E and ν
-flagged invalid by the test are shown as such and left out of the means.
+standard error (sd / √n, relative to the target); E and ν flagged invalid by the test are
+shown as such and left out of the means.
 
     python benchmarks/preset_held_out.py --preset thesis-ch4-calibrated-25x50 --seeds 4,5,6 \\
         --width-mm 25 --height-mm 50 --particle-radius-mm 0.1 --out DIR

@@ -202,6 +202,20 @@ def _errors(resp, targets):
     return {k: float(resp[k]) / v - 1.0 for k, v in targets.items()}
 
 
+def _setup(targets, knobs, jacobian):
+    """Checked targets and knobs, the response names, the Jacobian and the log bounds."""
+    targets = dict(DEFAULT_TARGETS if targets is None else targets)
+    knobs = tuple(knobs)
+    _check(targets, knobs)
+    names = list(targets)
+    J = initial_jacobian(names, knobs) if jacobian is None else np.array(jacobian, float)
+    if J.shape != (len(names), len(knobs)):
+        raise ValueError(f"'jacobian' has shape {J.shape}, expected {(len(names), len(knobs))}")
+    lo = np.log([k.bounds[0] for k in knobs])
+    hi = np.log([k.bounds[1] for k in knobs])
+    return targets, knobs, names, J, lo, hi
+
+
 def _newton_step(u, r, J, lo, hi, max_log_step):
     """``clip(u - J⁺ r)``: one least-squares step in log variables, within the bounds."""
     du = np.linalg.lstsq(J, -r, rcond=None)[0]
@@ -213,11 +227,13 @@ def correction_step(responses, *, targets=None, knobs=DEFAULT_KNOBS, jacobian=No
                     max_log_step: float = math.log(4.0)) -> dict:
     """Multipliers that move the mean of ``responses`` onto ``targets``: one step, not run.
 
-    The seed-mean correction of :func:`calibrate` on its own, for responses measured
+    The Newton step of :func:`calibrate`'s seed rounds on its own, for responses measured
     elsewhere (for example a preset's results on specimens pooled from its calibration and
     from a held-out check). The step is ``u = clip(-J⁺ log(mean / target))`` in log
-    multipliers, with the scaling-law Jacobian (:func:`initial_jacobian`) unless one is given.
-    It is a prediction: evaluate the scaled set on specimens it has not seen.
+    multipliers, with the scaling-law Jacobian (:func:`initial_jacobian`) unless one is given
+    (the seed rounds pass the learnt Jacobian projected onto that structure,
+    :func:`project_jacobian`). It is a prediction: evaluate the scaled set on specimens it has
+    not seen.
 
     Parameters
     ----------
@@ -241,10 +257,7 @@ def correction_step(responses, *, targets=None, knobs=DEFAULT_KNOBS, jacobian=No
     >>> {k: round(v, 4) for k, v in m.items()}
     {'modulus': 1.0, 'tensile': 0.984, 'cohesion': 1.0069}
     """
-    targets = dict(DEFAULT_TARGETS if targets is None else targets)
-    knobs = tuple(knobs)
-    _check(targets, knobs)
-    names = list(targets)
+    targets, knobs, names, J, lo, hi = _setup(targets, knobs, jacobian)
     if len(responses) == 0:
         raise ValueError("'responses' is empty: expected one dict per specimen")
     for i, resp in enumerate(responses):
@@ -252,11 +265,6 @@ def correction_step(responses, *, targets=None, knobs=DEFAULT_KNOBS, jacobian=No
         if bad:
             raise ValueError(f"responses[{i}] has no positive '{bad[0]}' (expected {names})")
     mean = np.array([[float(resp[k]) for k in names] for resp in responses]).mean(axis=0)
-    J = initial_jacobian(names, knobs) if jacobian is None else np.array(jacobian, float)
-    if J.shape != (len(names), len(knobs)):
-        raise ValueError(f"'jacobian' has shape {J.shape}, expected {(len(names), len(knobs))}")
-    lo = np.log([k.bounds[0] for k in knobs])
-    hi = np.log([k.bounds[1] for k in knobs])
     u = _newton_step(np.zeros(len(knobs)), np.log(mean / np.array([targets[k] for k in names])),
                      J, lo, hi, max_log_step)
     return {k.name: float(m) for k, m in zip(knobs, np.exp(u))}
@@ -321,17 +329,9 @@ def calibrate(evaluate, params: dict, *, targets=None, knobs=DEFAULT_KNOBS, tol:
     The best search point (smallest maximum relative error) is kept even when the budget runs
     out; ``converged`` then says False and ``final_errors`` gives the misses.
     """
-    targets = dict(DEFAULT_TARGETS if targets is None else targets)
-    knobs = tuple(knobs)
-    _check(targets, knobs)
-    names = list(targets)
+    targets, knobs, names, J0, lo, hi = _setup(targets, knobs, jacobian)
     tvec = np.array([targets[k] for k in names], float)
-    lo = np.log([k.bounds[0] for k in knobs])
-    hi = np.log([k.bounds[1] for k in knobs])
-    J0 = initial_jacobian(names, knobs) if jacobian is None else np.array(jacobian, float)
     J = J0
-    if J.shape != (len(names), len(knobs)):
-        raise ValueError(f"'jacobian' has shape {J.shape}, expected {(len(names), len(knobs))}")
     t0 = time.perf_counter()
     records = []
 

@@ -162,7 +162,7 @@ def test_a_worse_correction_round_is_not_kept():
 def test_correction_step_lands_a_scaling_law_model_on_the_targets():
     """Responses that follow the scaling laws exactly (E ∝ m, UCS ∝ t^0.3 c^0.7,
     σt ∝ t^0.9 c^0.1) are put on the targets by one step, whatever the scatter between
-    specimens; the step is the one calibrate's seed round takes (same Newton step)."""
+    specimens (the Newton step of calibrate's seed rounds, with the scaling-law Jacobian)."""
     def model(m, t, c, f):
         return {"E": 63e9 * m * f, "UCS": 132e6 * t ** 0.3 * c ** 0.7 * f,
                 "sigma_t": 19.5e6 * t ** 0.9 * c ** 0.1 / f}
