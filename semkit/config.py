@@ -40,6 +40,17 @@ AUTO_SEED_SIGMAS = 6.0
 THIN_ONLY_CRACK_RATIO = 0.3
 #: when nothing is darker than the darkest mineral, the crack grey is this low percentile.
 DARKEST_PERCENT = 0.2
+#: no pixel darker than the darkest mineral: narrow dark lines in the rock
+#: (:func:`semkit.threshold.line_crack_level`) are read as cracks when they hold at least this
+#: share of the image (crack-free images with a dark mineral: 0.07-0.18 %, from its grain
+#: corners and rims; cracked ones >= 2.5 %), and the result is flagged when they hold more
+#: than ``LINE_WARN_SHARE`` but too little to be read
+LINE_CRACK_MIN_SHARE = 0.005
+LINE_WARN_SHARE = 0.002
+#: ... in components of at least this many px
+LINE_MIN_COMPONENT_PX = 20
+#: ... and the crack grey is this percentile of the line pixels
+LINE_CRACK_PERCENTILE = 5.0
 #: background of an excluded pixel: mean of its known neighbours within this many noise
 #: sigmas of the darkest one (one phase, never a mix across a phase boundary).
 BACKGROUND_BAND_SIGMAS = 4.0
@@ -263,6 +274,9 @@ REJECT_RIM_MAX_SLENDERNESS = 12.0
 #: the darker side outside by this share of the contrast (and not reaching the crack core)
 REJECT_RIM_LOOP_PX = 20
 REJECT_RIM_HOLE_LIFT = 0.3
+#: ... and its holes hold at least this share of its own area (a ring around an inclusion of
+#: radius >= half the ring's width holds >= 1/8; a network with one small loop far less)
+REJECT_RIM_HOLE_SHARE = 0.1
 #: ... and at least this wide (a blurred thin crack is shallow; its depth says little)
 REJECT_RIM_MIN_WIDTH_PX = 2.5
 #: objects smaller than this (px) are not judged: too few pixels for their statistics

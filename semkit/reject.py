@@ -10,7 +10,10 @@ Every cleaned object gets a few measures (:func:`object_evidence`):
 * ``encloses_px``, ``hole_lift`` — area of the holes the object closes around, and how much
   brighter they are than the darker side outside (share of the contrast): a ring around a
   brighter grain is that grain's rim (a halo), however long; a crack network closing around a
-  grain of the same rock is not lifted.
+  grain of the same rock is not lifted. A ring of width w around an inclusion of radius r
+  closes r^2 / (2 r w + w^2) of its own area (1/3 at r = w, 1/8 at r = w / 2): an object
+  whose holes hold less than ``REJECT_RIM_HOLE_SHARE`` of its area is a network with a small
+  loop somewhere, not a rim.
 * ``elongation`` — sqrt of the ratio of the principal second moments (1 for a disc).
 * ``width_px`` — mean width, area over skeleton length; ``slenderness`` — skeleton length
   over mean width (a curved crack is slender even when its moments are not elongated).
@@ -49,6 +52,7 @@ RULES = (
      & (e.slenderness < config.REJECT_RIM_MAX_SLENDERNESS)
      & (e.width_px >= config.REJECT_RIM_MIN_WIDTH_PX)),
     ("grain_rim", lambda e: (e.encloses_px >= config.REJECT_RIM_LOOP_PX)
+     & (e.encloses_px >= config.REJECT_RIM_HOLE_SHARE * e.area_px)
      & (e.hole_lift >= config.REJECT_RIM_HOLE_LIFT)
      & (e.side_depth < config.REJECT_ZONE_MAX_DEPTH)),
     ("compact_dark", lambda e: (e.slenderness < config.REJECT_COMPACT_SLENDERNESS)

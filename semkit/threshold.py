@@ -217,6 +217,43 @@ def dark_class_levels(image) -> DarkLevels:
     return DarkLevels(mineral, float(sigma), crack, float(seed), n_dark, sn)
 
 
+def line_crack_level(image, mineral, noise):
+    """Crack grey read on narrow dark lines in the rock, and the share of the image they hold.
+
+    Used when no pixel is darker than the darkest mineral phase, as when a dark mineral is as
+    dark as the partial volumes of thin cracks. A line pixel lies more than
+    ``AUTO_SEED_SIGMAS`` noise sigmas and ``AUTO_SEED_FRACTION`` of the local contrast below
+    the image's 7 x 7 grey closing (which fills every dark feature narrower than ~6 px and
+    leaves grains, however dark, as they are), where that closing is itself that many sigmas
+    above the darkest mineral (inside a dark grain every noise dip would count), in a
+    component of at least ``LINE_MIN_COMPONENT_PX`` (specks and grain corners are smaller).
+    The crack grey is the ``LINE_CRACK_PERCENTILE`` percentile of the line pixels: the cores
+    of the widest lines (the lines' median would mix in partial volumes, read the crack grey
+    too bright and inflate every partial-volume area).
+
+    Returns
+    -------
+    level : float
+        Crack grey; NaN when there are no line pixels.
+    share : float
+        Line pixels over image pixels.
+    """
+    import cv2
+    img = np.ascontiguousarray(image, np.float32)
+    closed = cv2.morphologyEx(img, cv2.MORPH_CLOSE, np.ones((7, 7), np.uint8))
+    line = closed - img
+    lift = closed - np.float32(mineral)
+    deep = np.float32(config.AUTO_SEED_SIGMAS * noise)
+    on = (line > deep) & (line > np.float32(config.AUTO_SEED_FRACTION) * lift) & (lift > deep)
+    n, lab, stats, _ = cv2.connectedComponentsWithStats(on.view(np.uint8), connectivity=8)
+    big = np.r_[False, stats[1:, cv2.CC_STAT_AREA] >= config.LINE_MIN_COMPONENT_PX]
+    vals = img[big[lab]]
+    if vals.size == 0:
+        return float("nan"), 0.0
+    return (float(_percentiles(vals, (config.LINE_CRACK_PERCENTILE,))[0]),
+            float(vals.size) / img.size)
+
+
 def _local_background(img, exclude, *, band, n_rings=4, max_rings=64):
     """Grey level the image would have without the excluded (dark) pixels.
 
@@ -295,10 +332,20 @@ def threshold_auto(image, *, area_fraction=config.AUTO_AREA_FRACTION,
         # cracks in a bright mineral): take the crack grey from the darkest pixels and find
         # cracks as narrow dark lines only (the closing criterion below)
         lo = _percentiles(img[::2, ::2], (config.DARKEST_PERCENT,))[0]
-        if not lo < lv.mineral - config.AUTO_SEED_SIGMAS * lv.noise:
-            m = np.zeros(img.shape, bool)
-            return ThresholdResult(m, m, "auto", lv.seed, 0.0, True, "no dark class")
-        lv = dataclasses.replace(lv, crack=float(lo))
+        if lo < lv.mineral - config.AUTO_SEED_SIGMAS * lv.noise:
+            crack = float(lo)
+        else:  # the darkest mineral is as dark as the darkest crack pixels (thin cracks are
+            # partial volumes): the crack grey is read on the narrow dark lines themselves
+            crack, share = line_crack_level(img, lv.mineral, lv.noise)
+            if share < config.LINE_CRACK_MIN_SHARE:
+                m = np.zeros(img.shape, bool)
+                if share < config.LINE_WARN_SHARE:
+                    return ThresholdResult(m, m, "auto", lv.seed, 0.0, True, "no dark class")
+                return ThresholdResult(
+                    m, m, "auto", lv.seed, 0.0, False,
+                    f"no dark class, but narrow dark lines hold {share:.2%} of the image: "
+                    "cracks as dark as the darkest mineral may be missed")
+        lv = dataclasses.replace(lv, crack=crack)
         note0 = "no dark tail below the darkest mineral: cracks found as narrow dark lines"
     sn = lv.noise
     # exclude everything that might be crack (incl. its blurred rim) from the background:

@@ -125,9 +125,11 @@ def test_surround_never_becomes_a_crack_and_leaves_the_per_area_figures():
     truth = (s.crack_mask & core).sum()
     assert row["crack_area_um2"] == pytest.approx(truth, rel=0.15)
     assert row["crack_area_fraction"] == pytest.approx(truth / core.sum(), rel=0.15)
-    # without the region the surround is the darkest "phase" and the cracks are lost
+    # without the region the surround is the darkest "phase": the cracks are only read as
+    # narrow dark lines, their area is off (1.6x) and the row says so
     none = analyse_image(img, pixel_size_um=1.0, roi="none").summary()
-    assert none["crack_area_um2"] < 0.5 * truth
+    assert abs(none["crack_area_um2"] / truth - 1.0) > 0.3
+    assert not none["threshold_ok"] and not none["valid"]
 
 
 def test_user_roi_mask(tmp_path):

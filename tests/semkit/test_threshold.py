@@ -5,6 +5,7 @@ from _synth_cases import case
 
 from semkit.cleanup import denoise
 from semkit.errors import InputError
+from semkit.synth import make_sem_image
 from semkit.illumination import flatten_illumination
 from semkit.threshold import (
     crack_mask,
@@ -92,3 +93,41 @@ def test_illumination_field_on_a_flat_nearly_noiseless_image():
     img = np.clip(ndi.gaussian_filter(img, 0.7) + rng.normal(0, 3, img.shape), 0, 255)
     f = illumination_field(img.astype(np.uint8))
     assert np.isfinite(f).all() and f.min() > 0.9 and f.max() == 1.0
+
+
+@pytest.mark.parametrize("seed", [3, 7])
+def test_cracks_as_dark_as_the_darkest_mineral_are_measured_and_flagged(seed):
+    """A dark mineral as dark as the thin cracks' partial volumes leaves no pixel darker than
+    the darkest mineral. The cracks must still be found as narrow dark lines (their grey read
+    on the lines) and the result flagged; the image was once reported crack-free and valid."""
+    from semkit.analysis import analyse_image
+    from semkit.threshold import _percentiles
+    minerals = (("m0", 140.0, 0.47), ("m1", 168.5, 0.31), ("m2", 203.3, 0.20),
+                ("dark", 51.0, 0.11))
+    s = make_sem_image((512, 640), stage="post", seed=seed, minerals=minerals,
+                       widths=(1.0, 4.5), noise_sigma=8.0, blur_sigma=0.8, mean_grain_px=100)
+    a = analyse_image(s.image, pixel_size_um=1.0, name="dark_mineral")
+    lv = dark_class_levels(a.smooth)  # the case: no dark tail, nothing below the mineral
+    assert not (np.isfinite(lv.crack) and lv.n_dark >= 10)
+    assert _percentiles(a.smooth[::2, ::2], (0.2,))[0] >= lv.mineral - 6.0 * lv.noise
+    row = a.summary()
+    area = row["crack_area_um2"] / s.cracks["area_cov_px"].sum() - 1.0
+    length = row["crack_length_um"] / s.cracks["length_px"].sum() - 1.0
+    assert abs(area) < 0.25 and abs(length) < 0.2, (area, length)  # +15/+8 %, +7/+3 %
+    assert not row["threshold_ok"] and not row["valid"]
+
+
+def test_line_crack_level_ignores_noise_inside_a_dark_grain():
+    """Inside a dark grain every noise dip is below the closing; only lines in the brighter
+    rock count, so a crack-free image with a dark mineral has (almost) no line pixels."""
+    from semkit.threshold import dark_class_levels, line_crack_level
+    s = make_sem_image((512, 640), stage="pre", n_cracks=0, n_speckles=0, seed=0,
+                       minerals=(("a", 200.0, 0.5), ("b", 150.0, 0.35), ("dark", 50.0, 0.15)))
+    img = s.image.astype(np.float32)
+    lv = dark_class_levels(img)
+    _, share = line_crack_level(img, lv.mineral, lv.noise)
+    assert share < 0.002
+    c = make_sem_image((512, 640), stage="pre", n_cracks=8, widths=(2.0, 4.0), seed=0,
+                       minerals=(("a", 200.0, 0.5), ("b", 150.0, 0.35), ("dark", 50.0, 0.15)))
+    level, share = line_crack_level(c.image.astype(np.float32), lv.mineral, lv.noise)
+    assert share > 0.005 and level < 100.0

@@ -1,0 +1,104 @@
+"""Benchmark: default ``semkit analyse`` on the development family (randomised ``semkit.synth``).
+
+The development family is where detection changes are looked at and tried: ``semkit.synth``
+post-test images whose appearance is drawn at random per image (2-4 minerals of random grey,
+in 60 % of images a dark mineral at 45-75 grey, grain size, pores, noise, blur, boundary depth
+0.05-0.35, crack widths, illumination ramp, 8 or 16 bit). It is the generator semkit is tuned
+on, so its errors here are not a general accuracy figure: that is the held-out generator's job
+(``benchmarks/heldout_semkit.py``, never tuned on). Each image is scored against its exact
+truth: total crack area (partial-volume coverage) and length errors, and whether semkit flags
+the image (``valid``). A *confidently wrong* image is one marked valid whose area or length is
+off by more than 25 %.
+
+Writes ``benchmarks/semkit_results/dev_family.json`` and prints a markdown table.
+
+Run: ``python benchmarks/semkit_dev_family.py [--n 24] [--jobs 2]``
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import pathlib
+import platform
+from concurrent.futures import ProcessPoolExecutor
+
+import numpy as np
+
+OUT = pathlib.Path(__file__).resolve().parent / "semkit_results"
+#: a valid image off by more than this (area or length) is confidently wrong
+WRONG = 0.25
+
+
+def appearance(seed):
+    """The randomised ``make_sem_image`` keywords of development image ``seed``."""
+    r = np.random.default_rng(10_000 + seed)
+    nm = int(r.integers(2, 5))
+    minerals = [(f"m{i}", float(g), float(r.uniform(0.1, 0.5)))
+                for i, g in enumerate(r.uniform(70, 225, nm))]
+    if r.random() < 0.6:
+        minerals.append(("dark", float(r.uniform(45, 75)), float(r.uniform(0.05, 0.15))))
+    widths = (float(r.uniform(1, 2.5)), float(r.uniform(4, 10)))
+    return dict(minerals=minerals, gradient=float(r.choice([1.0, r.uniform(1.2, 2.5)])),
+                n_pores=int(r.integers(0, 25)), noise_sigma=float(r.uniform(2, 12)),
+                blur_sigma=float(r.uniform(0.4, 1.4)),
+                boundary_depth=float(r.uniform(0.05, 0.35)), bit_depth=int(r.choice([8, 16])),
+                widths=widths, mean_grain_px=float(r.uniform(50, 160)))
+
+
+def score_image(seed, shape=(768, 1024)):
+    """Analyse development image ``seed``; its truth, semkit's numbers and the errors."""
+    from semkit.analysis import analyse_image
+    from semkit.synth import make_sem_image
+    s = make_sem_image(shape, stage="post", seed=seed, **appearance(seed))
+    row = analyse_image(s.image, pixel_size_um=s.pixel_size_um, name=f"dev_{seed}",
+                        stage="failure", classify=False).summary()
+    area = row["crack_area_um2"] / s.pixel_size_um ** 2
+    length = row["crack_length_um"] / s.pixel_size_um
+    at, lt = float(s.cracks["area_cov_px"].sum()), float(s.cracks["length_px"].sum())
+    return dict(seed=seed, area_true_px=at, area_px=area, area_err=area / at - 1,
+                length_true_px=lt, length_px=length, length_err=length / lt - 1,
+                n_cracks_true=len(s.cracks), n_cracks=row["n_cracks"],
+                valid=bool(row["valid"]), valid_note=row["valid_note"])
+
+
+def summarise(rows):
+    ae = np.array([r["area_err"] for r in rows])
+    le = np.array([r["length_err"] for r in rows])
+    ok = np.array([r["valid"] for r in rows])
+    wrong = ok & ((np.abs(ae) > WRONG) | (np.abs(le) > WRONG))
+    return dict(n_images=len(rows), n_valid=int(ok.sum()),
+                area_err_median=float(np.median(np.abs(ae))),
+                area_err_signed_median=float(np.median(ae)),
+                length_err_median=float(np.median(np.abs(le))),
+                length_err_signed_median=float(np.median(le)),
+                area_err_median_valid=float(np.median(np.abs(ae[ok]))) if ok.any() else None,
+                length_err_median_valid=float(np.median(np.abs(le[ok]))) if ok.any() else None,
+                confidently_wrong=[r["seed"] for r, w in zip(rows, wrong) if w])
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--n", type=int, default=24, help="images (seeds 1..N)")
+    ap.add_argument("--jobs", type=int, default=2)
+    args = ap.parse_args(argv)
+    with ProcessPoolExecutor(args.jobs) as ex:
+        rows = list(ex.map(score_image, range(1, args.n + 1)))
+    s = summarise(rows)
+    OUT.mkdir(parents=True, exist_ok=True)
+    meta = dict(machine=platform.machine(), cpus=os.cpu_count(), load=os.getloadavg())
+    (OUT / "dev_family.json").write_text(json.dumps(dict(meta=meta, summary=s, per_image=rows),
+                                                    indent=1, default=float))
+    print("| measure | median |error| (all) | median |error| (valid) | signed median |")
+    print("|---|---|---|---|")
+    print(f"| area | {s['area_err_median']:.1%} | {s['area_err_median_valid']:.1%} | "
+          f"{s['area_err_signed_median']:+.1%} |")
+    print(f"| length | {s['length_err_median']:.1%} | {s['length_err_median_valid']:.1%} | "
+          f"{s['length_err_signed_median']:+.1%} |")
+    print(f"\nvalid: {s['n_valid']} of {s['n_images']}; confidently wrong (valid, off by "
+          f"> {WRONG:.0%}): {s['confidently_wrong'] or 'none'}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
