@@ -502,7 +502,24 @@ class CrackAnalysis:
             notes.append(f"roi: {self.region.note}")
         if row["pixel_size_note"]:
             notes.append(f"pixel size: {row['pixel_size_note']}")
+        share, by_rule = self._zone_rejected_share()
+        if share >= config.REJECT_MAX_ZONE_SHARE:
+            rules = ", ".join(f"{k} {v:.0%}" for k, v in by_rule.items())
+            notes.append(f"rejection: {share:.0%} of the dark area was rejected by the zone and "
+                         f"shape rules ({rules}); the figures depend on them: check the overlay")
         return dict(valid=not notes, valid_note="; ".join(notes))
+
+    def _zone_rejected_share(self):
+        """Share of the dark objects' area (pores aside) that the zone and shape rules
+        rejected, in all and per rule (``phase_rim``, a boundary segment, is not counted)."""
+        o = self._classified_objects
+        o = o[~o["is_pore"].to_numpy(bool)] if self.options.exclude_pores else o
+        total = float(o["area_px"].sum())
+        zone = o[~o["rejected_as"].isin(["", "phase_rim"])]
+        if total <= 0 or zone.empty:
+            return 0.0, {}
+        by_rule = (zone.groupby("rejected_as")["area_px"].sum() / total).to_dict()
+        return float(zone["area_px"].sum()) / total, by_rule
 
 
 def analyse_image(image, *, pixel_size_um=config.DEFAULT_PIXEL_SIZE_UM, name="",

@@ -297,6 +297,9 @@ REJECT_MOTTLED_NEIGHBOURS = 4
 #: an object whose dark core reaches this share of the crack contrast is an open crack or
 #: void: the dark-phase, mottled, compact and grain-rim rules never reject it
 REJECT_ZONE_MAX_DEPTH = 0.85
+#: an image whose zone and shape rules (all but phase_rim) rejected at least this share of the
+#: dark objects' area is flagged (valid = False): its figures rest on the rules
+REJECT_MAX_ZONE_SHARE = 0.2
 #: side of the grey closing giving an object's local background (fills cracks narrower), px
 ZONE_CLOSING_PX = 21
 #: side of the window of the detection density, px

@@ -31,3 +31,23 @@ def test_an_open_crack_is_never_rejected_for_its_zone():
     assert list(reject_objects(ev)) == [""]
     assert {name for name, _ in RULES} >= {"phase_rim", "grain_rim", "compact_dark",
                                            "dark_phase", "mottled"}
+
+
+def test_an_image_whose_figures_rest_on_the_rules_is_flagged():
+    """Development image 12 (``benchmarks/semkit_dev_family.py``): a major mineral at 86 grey
+    is darker than 0.4 of the rock's contrast, so ``dark_phase`` removes the cracks in it
+    (23 % of the dark area; the area reads -47 %). The row must not be marked valid."""
+    from semkit.analysis import analyse_image
+    from semkit.synth import make_sem_image
+    s = make_sem_image(
+        (768, 1024), stage="post", seed=12,
+        minerals=[("m0", 100.93435153635961, 0.19269235188258926),
+                  ("m1", 201.97193674146888, 0.34511476154827647),
+                  ("m2", 86.0016029281838, 0.22482049782902208)],
+        gradient=1.0, n_pores=15, noise_sigma=2.941663974418888,
+        blur_sigma=0.9339025928519272, boundary_depth=0.23583599329837657, bit_depth=16,
+        widths=(2.127437174298544, 4.179943696396233), mean_grain_px=84.5177518053529)
+    a = analyse_image(s.image, pixel_size_um=s.pixel_size_um, classify=False)
+    row = a.summary()
+    assert not row["valid"] and "dark_phase" in row["valid_note"]
+    assert row["crack_area_um2"] / s.pixel_size_um ** 2 < 0.75 * s.cracks["area_cov_px"].sum()
