@@ -181,6 +181,9 @@ DATABAR_MIN_FLAT = 0.3
 DATABAR_TOL_GREY = 6
 #: the three rows next to a bar are sample: at most this flat (a round core's corners fade)
 DATABAR_SAMPLE_FLAT = 0.5
+#: ... and the median bar row is at least this flat (text covers a minority of a bar; a noisy
+#: image of large uniform grains is 40-50 % flat in every row)
+DATABAR_MEDIAN_FLAT = 0.7
 #: rows of text or a thick scale bar may break the run of bar rows by at most this many
 DATABAR_MAX_GAP_ROWS = 12
 #: a data bar holds at least this many rows and this share of the height, at most the last

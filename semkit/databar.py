@@ -116,7 +116,8 @@ def find_data_bar(image, *, min_flat=config.DATABAR_MIN_FLAT):
     Bar rows, counted from the edge: at least ``min_flat`` of the row's pixels are at its
     modal grey, that mode is the bar's background (the mode of the edge row), and in most of
     them this holds in every third of the width. Rows of text or a thick scale bar may
-    interrupt the run for at most ``DATABAR_MAX_GAP_ROWS``. The run must end abruptly (the
+    interrupt the run for at most ``DATABAR_MAX_GAP_ROWS``. Half the rows of the run hold at
+    least ``DATABAR_MEDIAN_FLAT`` background. The run must end abruptly (the
     next rows are textured sample) and carry ink: pixels at the other end of the grey scale
     (white text on a dark bar, dark text on a light one).
 
@@ -167,6 +168,10 @@ def find_data_bar(image, *, min_flat=config.DATABAR_MIN_FLAT):
         # and the background spans the width in most bar rows (a core's corner does not)
         if fl[n:n + 3].max(initial=0.0) > config.DATABAR_SAMPLE_FLAT or \
                 np.mean(th[:n] >= min_flat) < 0.5:
+            continue
+        # a bar is flat: most of its rows are mostly background, far flatter than the sample
+        # (a noisy image of large uniform grains has rows 40-50 % "flat" everywhere)
+        if np.median(fl[:n]) < config.DATABAR_MEDIAN_FLAT:
             continue
         r0, r1 = (h - n, h) if side == "bottom" else (0, n)
         # a bar carries text or a scale bar at the other end of the grey scale

@@ -156,3 +156,20 @@ def test_unreadable_label_is_not_used_and_is_said():
     row = analyse_image(img, pixel_size_um=1.0, pixel_size_source="default").summary()
     assert row["pixel_size_source"] == "default" and row["data_bar_rows"] == "384-430"
     assert "unreadable" in row["pixel_size_note"] and not row["valid"]
+
+
+def test_a_noisy_image_of_large_uniform_grains_has_no_data_bar():
+    """Development image 6 (``benchmarks/semkit_dev_family.py``): 16-bit, noise 10 grey, grains
+    of nearly one grey along the bottom, dark cracks as "ink". Every row is 40-50 % within the
+    bar tolerance of its mode, so the bottom 105 rows once passed for an information bar and
+    were cropped away with the cracks in them."""
+    s = make_sem_image(
+        (768, 1024), stage="post", seed=6,
+        minerals=[("m0", 181.02528466394688, 0.28133486961675713),
+                  ("m1", 133.98568208128552, 0.18875029543203672),
+                  ("m2", 184.68526466408161, 0.298110998029706),
+                  ("dark", 73.77277288876768, 0.12635284741117714)],
+        gradient=1.0, n_pores=5, noise_sigma=10.040966918671144,
+        blur_sigma=0.6249526982238409, boundary_depth=0.2872217922767762, bit_depth=16,
+        widths=(1.520780323502206, 4.258389270990163), mean_grain_px=108.51410994725072)
+    assert find_data_bar(s.image) is None
