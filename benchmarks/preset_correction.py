@@ -70,6 +70,26 @@ def held_out_rows(path):
     return rows
 
 
+def mapped_rows(spec):
+    """Held-out rows measured at an earlier set, mapped to the preset by response ratios.
+
+    ``spec`` is ``FILE:E=r1,UCS=r2,sigma_t=r3``: each response of ``FILE`` (a
+    ``preset_held_out.py`` result) is multiplied by its ratio, the preset's response over the
+    earlier set's response on the same specimens (measured by a paired run, or the step's
+    prediction where no paired run exists). The source names the file and the ratios.
+    """
+    path, sep, ratios = spec.rpartition(":")
+    try:
+        r = {k: float(v) for k, v in (item.split("=") for item in ratios.split(","))}
+    except ValueError:
+        r = {}
+    if not sep or set(r) != set(DEFAULT_TARGETS):
+        raise SystemExit(f"--mapped {spec!r}: expected FILE:E=r1,UCS=r2,sigma_t=r3")
+    note = ", ".join(f"{k} x {v:.6g}" for k, v in r.items())
+    return [{**row, **{k: row[k] * r[k] for k in DEFAULT_TARGETS},
+             "source": f"{row['source']}, mapped by {note}"} for row in held_out_rows(path)]
+
+
 def _six_digits(params):
     """Every number of the mineral and joint tables to 6 significant digits."""
     def r(t):
@@ -83,12 +103,16 @@ def main(argv=None):
     ap.add_argument("--preset", required=True, help="preset name the responses were measured at")
     ap.add_argument("--log", action="append", default=[], help="calibration_log.jsonl (repeat)")
     ap.add_argument("--held-out", action="append", default=[], help="held_out.json (repeat)")
+    ap.add_argument("--mapped", action="append", default=[],
+                    help="FILE:E=r1,UCS=r2,sigma_t=r3: held_out.json measured at an earlier "
+                         "set, each response times its ratio to the preset (repeat)")
     ap.add_argument("--out", required=True)
     a = ap.parse_args(argv)
     rows = [r for p in a.log for r in log_rows(p)] + [r for p in a.held_out
                                                       for r in held_out_rows(p)]
+    rows += [r for spec in a.mapped for r in mapped_rows(spec)]
     if not rows:
-        raise SystemExit("no responses: give --log and/or --held-out")
+        raise SystemExit("no responses: give --log, --held-out and/or --mapped")
     p = load_params(a.preset)
     start = {"minerals": p.minerals, "joint": p.joint}
     mult = correction_step(rows)

@@ -47,8 +47,9 @@ def _summary(folder):
         return json.load(f)
 
 
-def run_seed(out, seed, *, preset, width_mm, height_mm, radius_mm):
-    """Build and test one seed (each step skipped when its output exists); its row."""
+def run_seed(out, seed, *, preset, width_mm, height_mm, radius_mm, tests=("ucs", "tension")):
+    """Build and test one seed (each step skipped when its output exists); its row (the
+    fields of a test not in ``tests`` are None)."""
     spec = os.path.join(out, f"s{seed}.npz")
     if not os.path.exists(spec):
         _run(["gbmgen.cli", "build", "--table", "table-4-1", "--scenario", "1",
@@ -56,18 +57,21 @@ def run_seed(out, seed, *, preset, width_mm, height_mm, radius_mm):
               "--particle-radius-mm", str(radius_mm), "--seed", str(seed),
               "--params", preset, "--out", spec])
     ucs_dir, ten_dir = os.path.join(out, f"ucs{seed}"), os.path.join(out, f"ten{seed}")
-    if _summary(ucs_dir) is None:
+    if "ucs" in tests and _summary(ucs_dir) is None:
         _run(["sim", "ucs", spec, "--out", ucs_dir, "--no-figures"])
-    if _summary(ten_dir) is None:
+    if "tension" in tests and _summary(ten_dir) is None:
         _run(["sim", "tension", spec, "--out", ten_dir, "--no-figures"])
-    u, t = _summary(ucs_dir), _summary(ten_dir)
-    e = u.get("elastic", {})
-    return {"seed": seed, "n_particles": u.get("n_particles"), "ucs_mpa": u["ucs_mpa"],
-            "E_gpa": u["E_gpa"], "E_ok": u["E_ok"], "E_gauge_gpa": e.get("E_gauge_gpa"),
-            "E_platen_gpa": e.get("E_platen_gpa"), "nu": u["nu"], "nu_ok": u["nu_ok"],
-            "tensile_mpa": t["tensile_mpa"], "ucs_steps": u.get("steps"),
-            "ucs_wall_s": u.get("wall_s"), "tension_steps": t.get("steps"),
-            "tension_wall_s": t.get("wall_s"), "threads": u.get("threads")}
+    u = _summary(ucs_dir) if "ucs" in tests else None
+    t = _summary(ten_dir) if "tension" in tests else None
+    u_, t_ = u or {}, t or {}
+    e = u_.get("elastic", {})
+    return {"seed": seed, "n_particles": (u_ or t_).get("n_particles"),
+            "ucs_mpa": u_.get("ucs_mpa"), "E_gpa": u_.get("E_gpa"), "E_ok": u_.get("E_ok"),
+            "E_gauge_gpa": e.get("E_gauge_gpa"), "E_platen_gpa": e.get("E_platen_gpa"),
+            "nu": u_.get("nu"), "nu_ok": u_.get("nu_ok"), "tensile_mpa": t_.get("tensile_mpa"),
+            "ucs_steps": u_.get("steps"), "ucs_wall_s": u_.get("wall_s"),
+            "tension_steps": t_.get("steps"), "tension_wall_s": t_.get("wall_s"),
+            "threads": (u_ or t_).get("threads")}
 
 
 def summarise(rows):
@@ -93,11 +97,12 @@ def table(rows, summary):
     lines = ["| seed | particles | UCS MPa | E GPa (gauge; platen) | ν | σt MPa |",
              "|---|---|---|---|---|---|"]
     for r in rows:
-        e = "invalid" if r["E_gpa"] is None else f"{r['E_gpa']:.1f}"
-        nu = "invalid" if r["nu"] is None else f"{r['nu']:.3f}"
-        lines.append(f"| {r['seed']} | {r['n_particles']} | {r['ucs_mpa']:.1f} | {e} "
+        ran = r["ucs_mpa"] is not None
+        e = "–" if not ran else "invalid" if r["E_gpa"] is None else f"{r['E_gpa']:.1f}"
+        nu = "–" if not ran else "invalid" if r["nu"] is None else f"{r['nu']:.3f}"
+        lines.append(f"| {r['seed']} | {r['n_particles']} | {_num(r['ucs_mpa'], '.1f')} | {e} "
                      f"({_num(r['E_gauge_gpa'], '.1f')}; {_num(r['E_platen_gpa'], '.1f')}) | {nu} | "
-                     f"{r['tensile_mpa']:.2f} |")
+                     f"{_num(r['tensile_mpa'], '.2f')} |")
 
     def cell(k, fmt):
         s = summary[k]
@@ -105,7 +110,8 @@ def table(rows, summary):
             return "no valid value"
         sd = "" if s["sd"] is None else f" ± {s['sd']:{fmt}}"
         se = "" if s.get("error_se") is None else f" ± {100 * s['error_se']:.1f}"
-        n = f", {s['n']} valid of {len(rows)}" if s["n"] < len(rows) else ""
+        ran = sum(r["ucs_mpa" if k == "E_gpa" else k] is not None for r in rows)
+        n = f", {s['n']} valid of {ran}" if s["n"] < ran else ""
         return f"{s['mean']:{fmt}}{sd} ({100 * s['error']:+.1f}{se} %{n})"
     lines.append(f"| **mean ± sd** | | {cell('ucs_mpa', '.1f')} | {cell('E_gpa', '.1f')} | | "
                  f"{cell('tensile_mpa', '.2f')} |")
@@ -121,18 +127,24 @@ def main(argv=None):
     ap.add_argument("--particle-radius-mm", type=float, default=0.1)
     ap.add_argument("--out", required=True, help="working folder (specimens, test outputs)")
     ap.add_argument("--json", default=None, help="result file (default OUT/held_out.json)")
+    ap.add_argument("--tests", default="ucs,tension",
+                    help="tests to run per seed: ucs, tension or both (default)")
     args = ap.parse_args(argv)
     os.makedirs(args.out, exist_ok=True)
     seeds = [int(s) for s in args.seeds.split(",")]
+    tests = tuple(t.strip() for t in args.tests.split(","))
+    if not tests or set(tests) - {"ucs", "tension"}:
+        raise SystemExit(f"--tests {args.tests!r}: expected ucs, tension or ucs,tension")
     rows = [run_seed(args.out, s, preset=args.preset, width_mm=args.width_mm,
-                     height_mm=args.height_mm, radius_mm=args.particle_radius_mm)
+                     height_mm=args.height_mm, radius_mm=args.particle_radius_mm, tests=tests)
             for s in seeds]
     summary = summarise(rows)
     build = (f"gbmgen build --table table-4-1 --scenario 1 --width-mm {args.width_mm:g} "
              f"--height-mm {args.height_mm:g} --particle-radius-mm {args.particle_radius_mm:g} "
              f"--seed S --params {args.preset} --out sS.npz")
+    cmd = {"ucs": "gbmsim ucs sS.npz --out ucsS", "tension": "gbmsim tension sS.npz --out tenS"}
     result = {"preset": args.preset, "targets": TARGETS, "build": build,
-              "tests": ["gbmsim ucs sS.npz --out ucsS", "gbmsim tension sS.npz --out tenS"],
+              "tests": [cmd[t] for t in tests],
               "load": os.getloadavg(), "held_out": rows, "summary": summary}
     path = args.json or os.path.join(args.out, "held_out.json")
     tmp = path + ".tmp"
