@@ -502,12 +502,29 @@ class CrackAnalysis:
             notes.append(f"roi: {self.region.note}")
         if row["pixel_size_note"]:
             notes.append(f"pixel size: {row['pixel_size_note']}")
+        faint = self._faint_length_share()
+        if faint >= config.FAINT_MAX_LENGTH_SHARE:
+            notes.append(f"faint lines: {faint:.0%} of the crack length lies less than "
+                         f"{config.FAINT_LINE_DEPTH:g} of the crack contrast below its "
+                         "surroundings (grain boundaries or faint cracks): check the overlay")
         share, by_rule = self._zone_rejected_share()
         if share >= config.REJECT_MAX_ZONE_SHARE:
             rules = ", ".join(f"{k} {v:.0%}" for k, v in by_rule.items())
             notes.append(f"rejection: {share:.0%} of the dark area was rejected by the zone and "
                          f"shape rules ({rules}); the figures depend on them: check the overlay")
         return dict(valid=not notes, valid_note="; ".join(notes))
+
+    def _faint_length_share(self):
+        """Share of the crack length in objects whose core lies less than
+        ``FAINT_LINE_DEPTH`` of the contrast below their darker side (``side_depth``); 0 when
+        the rejection rules are off (no evidence is measured then)."""
+        c = self.cracks
+        if not self.options.reject or c.empty or not self.options.length:
+            return 0.0
+        depth = self.evidence["side_depth"].reindex(c["crack_id"]).to_numpy()
+        length = c["length_px"].to_numpy()
+        total = float(length.sum())
+        return float(length[depth < config.FAINT_LINE_DEPTH].sum()) / total if total > 0 else 0.0
 
     def _zone_rejected_share(self):
         """Share of the dark objects' area (pores aside) that the zone and shape rules

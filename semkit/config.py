@@ -303,6 +303,13 @@ REJECT_ZONE_MAX_DEPTH = 0.85
 #: an image whose zone and shape rules (all but phase_rim) rejected at least this share of the
 #: dark objects' area is flagged (valid = False): its figures rest on the rules
 REJECT_MAX_ZONE_SHARE = 0.2
+#: an image with at least FAINT_MAX_LENGTH_SHARE of its crack length in objects whose core
+#: lies less than FAINT_LINE_DEPTH of the contrast below their darker side is flagged: faint
+#: lines are grain boundaries as often as cracks (development family: a valid image with
+#: boundaries darkened by a third read length +38 % at 26 %; every other valid image <= 11 %,
+#: semkit.synth 1-px cracks 7-8 %, micro-CT tuning slices <= 4 %)
+FAINT_LINE_DEPTH = 0.2
+FAINT_MAX_LENGTH_SHARE = 0.2
 #: side of the grey closing giving an object's local background (fills cracks narrower), px
 ZONE_CLOSING_PX = 21
 #: side of the window of the detection density, px

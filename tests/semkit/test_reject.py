@@ -51,3 +51,26 @@ def test_an_image_whose_figures_rest_on_the_rules_is_flagged():
     row = a.summary()
     assert not row["valid"] and "dark_phase" in row["valid_note"]
     assert row["crack_area_um2"] / s.pixel_size_um ** 2 < 0.75 * s.cracks["area_cov_px"].sum()
+
+
+def test_an_image_whose_length_is_mostly_faint_lines_is_flagged():
+    """Development image 20: grain boundaries darkened by a third of the grain grey are
+    outlined as cracks (length +38 %); a quarter of the reported length lies less than 0.2 of
+    the crack contrast below its surroundings, so the row must not be marked valid. The
+    standard synthetic 1-px cracks (7-8 % of their length that faint) are not flagged so."""
+    from _synth_cases import case
+
+    from semkit.analysis import analyse_image
+    from semkit.synth import make_sem_image
+    s = make_sem_image(
+        (768, 1024), stage="post", seed=20,
+        minerals=[("m0", 221.22255037416485, 0.14980318553628452),
+                  ("m1", 129.87637575889366, 0.13291188624051392)],
+        gradient=1.0, n_pores=24, noise_sigma=3.8751548095782713,
+        blur_sigma=0.6909760711470674, boundary_depth=0.32631852138325074, bit_depth=8,
+        widths=(1.788613710282272, 6.47893099293689), mean_grain_px=111.17095517860974)
+    row = analyse_image(s.image, pixel_size_um=s.pixel_size_um, classify=False).summary()
+    assert row["crack_length_um"] / s.pixel_size_um > 1.25 * s.cracks["length_px"].sum()
+    assert not row["valid"] and "faint lines" in row["valid_note"]
+    thin = case(21, widths=(1.0, 1.0), n_cracks=12)
+    assert "faint lines" not in analyse_image(thin.image).summary()["valid_note"]
