@@ -10,7 +10,9 @@ so cracks are typed and P = A_T/A_S is reported, and compared with the exact tru
 * P: relative error per image; how many P carry ``P_status = low_confidence``; how many
   confident P (status ``ok``) are off by more than 2x (must be none);
 * crack-type accuracy by area on the pixels both truth and semkit call crack (for information;
-  the typing model is not tuned on these images).
+  the typing model is not tuned on these images);
+* how many images semkit marks ``valid``, and which of those are off by more than 25 % in
+  area or length (confidently wrong).
 
 Writes ``benchmarks/semkit_results/heldout_semkit.json`` and prints a markdown table.
 
@@ -33,6 +35,8 @@ ROOT = pathlib.Path(__file__).resolve().parent
 sys.path.insert(0, str(ROOT / "heldout"))
 OUT = ROOT / "semkit_results"
 TYPE_CODE = {"tensile": 1, "shear": 2, "mixed": 3}
+#: an image marked valid whose area or length is off by more than this is confidently wrong
+WRONG = 0.25
 
 
 def score_image(seed, shape, **options):
@@ -54,7 +58,8 @@ def score_image(seed, shape, **options):
                length_true_px=h.length_px, length_px=length,
                length_err=length / h.length_px - 1, P_true=h.P, P=row["P"],
                P_status=row.get("P_status", ""), n_cracks_true=len(h.cracks),
-               n_cracks=row["n_cracks"])
+               n_cracks=row["n_cracks"], valid=bool(row["valid"]),
+               valid_note=row["valid_note"])
     # the area of objects lying on true cracks (>= half their pixels within 2 px of one) and of
     # the others: is an area error the estimator's or the detector's?
     from scipy import ndimage as ndi
@@ -105,6 +110,9 @@ def summarise(rows):
                                        / sum(r["area_true_px"] for r in rows)),
         area_false_over_true=float(sum(r["area_false_px"] for r in rows)
                                    / sum(r["area_true_px"] for r in rows)),
+        n_valid=int(sum(r["valid"] for r in rows)),
+        confidently_wrong=[r["seed"] for r in rows if r["valid"] and max(
+            abs(r["area_err"]), abs(r["length_err"])) > WRONG],
         n_P_within_15pct=int(within.sum()),
         n_P_low_confidence=int(sum(s == "low_confidence" for s in st)),
         n_P_within_or_flagged=int(sum(w or s == "low_confidence" for w, s in zip(within, st))),
@@ -155,6 +163,8 @@ def main(argv=None):
               f"{s['n_P_low_confidence']}; within or flagged: {s['n_P_within_or_flagged']}; "
               f"confident P off by > 2x: {s['n_confident_P_off_2x']}; type accuracy by area "
               f"(median) {s['type_acc_by_area_median']:.2f}")
+    print(f"valid: {s['n_valid']} of {s['n_images']}; confidently wrong (valid, area or length "
+          f"off by > {WRONG:.0%}): {s['confidently_wrong'] or 'none'}")
     print(f"objects on true cracks: area {s['area_on_cracks_over_true']:.3f} x the true area; "
           f"other objects: {s['area_false_over_true']:.3f} x")
     print(f"{s['megapixels']:.1f} MP, {s['mp_per_s_per_process']:.2f} MP/s per process")
