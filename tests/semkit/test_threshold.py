@@ -131,3 +131,21 @@ def test_line_crack_level_ignores_noise_inside_a_dark_grain():
                        minerals=(("a", 200.0, 0.5), ("b", 150.0, 0.35), ("dark", 50.0, 0.15)))
     level, share = line_crack_level(c.image.astype(np.float32), lv.mineral, lv.noise)
     assert share > 0.005 and level < 100.0
+
+
+def test_too_few_lines_to_read_give_no_crack_but_a_flag(monkeypatch):
+    """Lines holding more than LINE_WARN_SHARE but less than LINE_CRACK_MIN_SHARE of the image
+    are too few to read a crack grey from: no crack, and threshold_ok False with the reason."""
+    from semkit import config
+    from semkit.analysis import analyse_image
+    minerals = (("m0", 140.0, 0.47), ("m1", 168.5, 0.31), ("m2", 203.3, 0.20),
+                ("dark", 51.0, 0.11))
+    s = make_sem_image((512, 640), stage="post", seed=3, minerals=minerals,
+                       widths=(1.0, 4.5), noise_sigma=8.0, blur_sigma=0.8, mean_grain_px=100)
+    smooth = analyse_image(s.image, pixel_size_um=1.0).smooth
+    monkeypatch.setattr(config, "LINE_CRACK_MIN_SHARE", 1.0)
+    r = crack_mask(smooth)
+    assert not r.ok and "may be missed" in r.note and not r.mask.any()
+    monkeypatch.setattr(config, "LINE_WARN_SHARE", 1.0)
+    r = crack_mask(smooth)
+    assert r.ok and r.note == "no dark class" and not r.mask.any()
