@@ -41,8 +41,9 @@ def _assert_same(p, want):
 def test_preset_is_the_accepted_point_of_the_25x50_calibrations():
     """The preset is the start file times the multipliers of the three logged steps (6
     significant digits at each stage): a search on seed 1, a search on the mean of seeds 1-3
-    starting where the first stopped, and one correction step on the pooled mean of seeds
-    1-9 (the second search's seed rows and the held-out seeds 4-9) at that point."""
+    starting where the first stopped, one correction step on the pooled mean of seeds 1-9
+    (the second search's seed rows and the held-out seeds 4-9) at that point, and one more on
+    the pooled mean of seeds 4-18."""
     first = _scaled(yaml.safe_load((CAL / "start_params.yaml").read_text()),
                     _accepted(_log(CAL / "calibration_log.jsonl")))
     start2 = yaml.safe_load((CAL / "mean_search" / "start_params.yaml").read_text())
@@ -66,9 +67,29 @@ def test_preset_is_the_accepted_point_of_the_25x50_calibrations():
     step = correction_step(corr["responses"])
     assert step == pytest.approx(corr["multipliers"], rel=1e-12)
     assert step["tensile"] == pytest.approx(0.946139, rel=1e-6)
+    third = _scaled(start3, step)
+    # fourth step: the pooled responses are the held-out seeds 10-18 at the third point and
+    # seeds 4-9 mapped from the second point by the paired tension ratio (sigma_t) and the
+    # third step's prediction (E, UCS)
+    pooled2 = CAL / "pooled_correction_2"
+    start4 = yaml.safe_load((pooled2 / "start_params.yaml").read_text())
+    _assert_same(start4, third)
+    corr2 = json.loads((pooled2 / "correction.json").read_text())
+    held3 = json.loads((pooled / "held_out.json").read_text())["held_out"]
+    paired = json.loads((pooled / "paired_tension.json").read_text())
+    ratio = {"E": 65e9 / corr["mean"]["E"], "UCS": 135e6 / corr["mean"]["UCS"],
+             "sigma_t": paired["ratio_mean"]}
+    want = ([[h["E_gpa"] * 1e9, h["ucs_mpa"] * 1e6, h["tensile_mpa"] * 1e6] for h in held3]
+            + [[h["E_gpa"] * 1e9 * ratio["E"], h["ucs_mpa"] * 1e6 * ratio["UCS"],
+                h["tensile_mpa"] * 1e6 * ratio["sigma_t"]] for h in held])
+    got = [[r[k] for k in ("E", "UCS", "sigma_t")] for r in corr2["responses"]]
+    np.testing.assert_allclose(got, want, rtol=1e-5)  # ratios written to 6 digits
+    step2 = correction_step(corr2["responses"])
+    assert step2 == pytest.approx(corr2["multipliers"], rel=1e-12)
+    assert step2["tensile"] == pytest.approx(0.939721, rel=1e-6)
     p = load_params(NAME)
     assert p.name == NAME and p.source == f"preset {NAME}"
-    _assert_same({"minerals": p.minerals, "joint": p.joint}, _scaled(start3, step))
+    _assert_same({"minerals": p.minerals, "joint": p.joint}, _scaled(start4, step2))
 
 
 def test_preset_is_chosen_by_name_and_differs_from_the_10x20_one():
@@ -77,10 +98,10 @@ def test_preset_is_chosen_by_name_and_differs_from_the_10x20_one():
     ratio = {k: big.minerals["pyroxene"][k] / small.minerals["pyroxene"][k]
              for k in ("pb_emod", "pb_ten", "pb_coh")}
     # the 25 x 50 mm specimens needed stronger tension than the 10 x 20 mm ones, about the
-    # same moduli and cohesions (products of the three steps' multipliers)
-    assert ratio["pb_emod"] == pytest.approx(0.9668 * 1.02956 * 0.994907, rel=1e-3)
-    assert ratio["pb_ten"] == pytest.approx(1.4783 * 0.940017 * 0.946139, rel=1e-3)
-    assert ratio["pb_coh"] == pytest.approx(1.0420 * 0.960495 * 1.04, rel=1e-3)
+    # same moduli and cohesions (products of the four steps' multipliers)
+    assert ratio["pb_emod"] == pytest.approx(0.9668 * 1.02956 * 0.994907 * 0.991945, rel=1e-3)
+    assert ratio["pb_ten"] == pytest.approx(1.4783 * 0.940017 * 0.946139 * 0.939721, rel=1e-3)
+    assert ratio["pb_coh"] == pytest.approx(1.0420 * 0.960495 * 1.04 * 1.0672, rel=1e-3)
     a = big.joint_arrays()                     # numeric joint stiffness: no radius needed
     assert np.isclose(a["sj_ks"][0], a["sj_kn"][0] / 2)
 
