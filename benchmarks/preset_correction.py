@@ -8,6 +8,10 @@ seed-mean correction (:func:`sim.calibrate.correction_step`, scaling-law Jacobia
 the step rests on all the specimens rather than on the first few. The step is a prediction:
 check the corrected set on specimens neither the calibration nor the pooled mean used.
 
+Specimens measured at an earlier set of the same calibration join with ``--mapped
+FILE:E=r1,UCS=r2,sigma_t=r3``: each response times its ratio to the preset (a paired run on
+the same specimens, or the step's own prediction where there is none).
+
 Writes into ``--out``: ``start_params.yaml`` (the preset as it was), ``correction.json``
 (every response with its source, the mean, its errors, the multipliers) and
 ``corrected_params.yaml`` (the preset times the multipliers, 6 significant digits), and prints

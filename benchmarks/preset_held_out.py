@@ -7,7 +7,9 @@ For each seed the specimen is built as a user builds it, then loaded with the de
     gbmsim ucs OUT/sS.npz --out OUT/ucsS
     gbmsim tension OUT/sS.npz --out OUT/tenS
 
-A seed whose specimen or summaries already exist is read back, not run again (an interrupted
+``--tests tension`` (or ``ucs``) runs one test per seed, for more specimens of one response
+in the same time; the other's columns stay empty. A seed whose specimen or summaries already
+exist is read back, not run again (an interrupted
 run continues where it stopped). Writes ``held_out.json`` (per seed: particles, UCS, E gauge
 and platen, ν, flags, σt, steps and wall time of each test) and prints a markdown table with
 the mean, the sample sd and each mean's error against the calibration targets
@@ -100,9 +102,9 @@ def table(rows, summary):
         ran = r["ucs_mpa"] is not None
         e = "–" if not ran else "invalid" if r["E_gpa"] is None else f"{r['E_gpa']:.1f}"
         nu = "–" if not ran else "invalid" if r["nu"] is None else f"{r['nu']:.3f}"
+        gauge = f"{_num(r['E_gauge_gpa'], '.1f')}; {_num(r['E_platen_gpa'], '.1f')}"
         lines.append(f"| {r['seed']} | {r['n_particles']} | {_num(r['ucs_mpa'], '.1f')} | {e} "
-                     f"({_num(r['E_gauge_gpa'], '.1f')}; {_num(r['E_platen_gpa'], '.1f')}) | {nu} | "
-                     f"{_num(r['tensile_mpa'], '.2f')} |")
+                     f"({gauge}) | {nu} | {_num(r['tensile_mpa'], '.2f')} |")
 
     def cell(k, fmt):
         s = summary[k]

@@ -118,6 +118,7 @@ def profile_ucs_row(spec, max_strain):
     adaptive speed, the stop rule, crack harvesting, neighbour rebuilds), s."""
     import cProfile
     import pstats
+
     from sim.protocols.registry import run_test
     prof = cProfile.Profile()
     prof.enable()
@@ -194,8 +195,9 @@ def main(argv=None) -> int:
                          "compiled step loop against the work between its calls")
     ap.add_argument("--out", default="benchmarks/ucs_results/throughput")
     a = ap.parse_args(argv)
-    import sim                             # noqa: F401  (before numba starts its threads:
-    import numba                           # sim picks the OpenMP threading layer)
+    import numba  # sim picks the OpenMP threading layer)
+
+    import sim  # noqa: F401  (before numba starts its threads:
     numba.set_num_threads(a.threads)
     os.makedirs(a.out, exist_ok=True)
     spec = ucs_specimen(a.width_mm, a.height_mm, a.seed)

@@ -190,8 +190,9 @@ def representativeness_note(frame) -> str:
     >>> f = pd.DataFrame({"status": ["ok", "ok", "failed"],
     ...                   "representative_ok": [False, True, None],
     ...                   "representative_warnings": ['["3.2 grains across"]', "[]", None]})
-    >>> representativeness_note(f)
-    '1 of 2 finished runs are on specimens that fail the representativeness rules (e.g. 3.2 grains across): their numbers say little about the rock.'
+    >>> print(representativeness_note(f))  # doctest: +NORMALIZE_WHITESPACE
+    1 of 2 finished runs are on specimens that fail the representativeness rules
+    (e.g. 3.2 grains across): their numbers say little about the rock.
     """
     ok = frame[frame["status"] == "ok"] if "status" in frame else frame
     if "representative_ok" not in ok or len(ok) == 0:

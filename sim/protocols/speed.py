@@ -123,8 +123,9 @@ class AdaptiveSpeed:
     - from the first crack on, f = 1 to the end of the test: the cracking, the approach to the
       peak, the peak and the post-peak run at the constant base speed, so the window where E
       and ν are read (10-60 % of the peak while few cracks have formed; cracks start early in
-      rock) is at a steady speed (:mod:`sim.protocols.elastic`). ``f_peak`` < 1 (an option, off by default) slows the
-      platens further near the peak (``T`` < ``tan_peak``) and after it.
+      rock) is at a steady speed (:mod:`sim.protocols.elastic`). ``f_peak`` < 1 (an option,
+      off by default) slows the platens further near the peak (``T`` < ``tan_peak``) and
+      after it.
 
     Attributes
     ----------

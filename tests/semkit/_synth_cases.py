@@ -1,4 +1,5 @@
-"""Shared synthetic cases for the semkit tests (cached once per test run: generation is the slow part)."""
+"""Shared synthetic cases for the semkit tests (cached once per test run: generation is the
+slow part)."""
 import functools
 
 from semkit.synth import make_sem_image

@@ -5,8 +5,8 @@ from _synth_cases import case
 
 from semkit.cleanup import denoise
 from semkit.errors import InputError
-from semkit.synth import make_sem_image
 from semkit.illumination import flatten_illumination
+from semkit.synth import make_sem_image
 from semkit.threshold import (
     crack_mask,
     dark_class_levels,
