@@ -85,6 +85,12 @@ def score_image(seed, shape, **options):
     return out
 
 
+def confidently_wrong(rows):
+    """Seeds of the rows marked ``valid`` whose area or length error exceeds ``WRONG``."""
+    return [r["seed"] for r in rows
+            if r["valid"] and max(abs(r["area_err"]), abs(r["length_err"])) > WRONG]
+
+
 def summarise(rows):
     ae = np.array([r["area_err"] for r in rows])
     le = np.array([r["length_err"] for r in rows])
@@ -111,8 +117,7 @@ def summarise(rows):
         area_false_over_true=float(sum(r["area_false_px"] for r in rows)
                                    / sum(r["area_true_px"] for r in rows)),
         n_valid=int(sum(r["valid"] for r in rows)),
-        confidently_wrong=[r["seed"] for r in rows if r["valid"] and max(
-            abs(r["area_err"]), abs(r["length_err"])) > WRONG],
+        confidently_wrong=confidently_wrong(rows),
         n_P_within_15pct=int(within.sum()),
         n_P_low_confidence=int(sum(s == "low_confidence" for s in st)),
         n_P_within_or_flagged=int(sum(w or s == "low_confidence" for w, s in zip(within, st))),

@@ -66,6 +66,9 @@ def held_out_rows(path):
         data = json.load(f)
     rows = []
     for r in data["held_out"]:
+        if r["ucs_mpa"] is None or r["tensile_mpa"] is None:
+            raise SystemExit(f"{path}: seed {r['seed']} lacks a UCS or tension result (a "
+                             "--tests file?); expected both on every pooled specimen")
         if r["E_gpa"] is None:
             raise SystemExit(f"{path}: seed {r['seed']} has E flagged invalid (E_gpa null); "
                              "expected valid E on every pooled specimen: leave it out")

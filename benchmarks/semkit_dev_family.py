@@ -24,10 +24,9 @@ import platform
 from concurrent.futures import ProcessPoolExecutor
 
 import numpy as np
+from heldout_semkit import WRONG, confidently_wrong  # one rule for both families
 
 OUT = pathlib.Path(__file__).resolve().parent / "semkit_results"
-#: a valid image off by more than this (area or length) is confidently wrong
-WRONG = 0.25
 
 
 def appearance(seed):
@@ -66,7 +65,6 @@ def summarise(rows):
     ae = np.array([r["area_err"] for r in rows])
     le = np.array([r["length_err"] for r in rows])
     ok = np.array([r["valid"] for r in rows])
-    wrong = ok & ((np.abs(ae) > WRONG) | (np.abs(le) > WRONG))
     return dict(n_images=len(rows), n_valid=int(ok.sum()),
                 area_err_median=float(np.median(np.abs(ae))),
                 area_err_signed_median=float(np.median(ae)),
@@ -74,7 +72,7 @@ def summarise(rows):
                 length_err_signed_median=float(np.median(le)),
                 area_err_median_valid=float(np.median(np.abs(ae[ok]))) if ok.any() else None,
                 length_err_median_valid=float(np.median(np.abs(le[ok]))) if ok.any() else None,
-                confidently_wrong=[r["seed"] for r, w in zip(rows, wrong) if w])
+                confidently_wrong=confidently_wrong(rows))
 
 
 def main(argv=None):

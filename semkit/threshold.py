@@ -217,7 +217,7 @@ def dark_class_levels(image) -> DarkLevels:
     return DarkLevels(mineral, float(sigma), crack, float(seed), n_dark, sn)
 
 
-def line_crack_level(image, mineral, noise):
+def line_crack_level(image, mineral, noise, *, closed=None):
     """Crack grey read on narrow dark lines in the rock, and the share of the image they hold.
 
     Used when no pixel is darker than the darkest mineral phase, as when a dark mineral is as
@@ -231,6 +231,8 @@ def line_crack_level(image, mineral, noise):
     of the widest lines (the lines' median would mix in partial volumes, read the crack grey
     too bright and inflate every partial-volume area).
 
+    ``closed`` may pass the image's 7 x 7 grey closing when the caller has it already.
+
     Returns
     -------
     level : float
@@ -240,7 +242,8 @@ def line_crack_level(image, mineral, noise):
     """
     import cv2
     img = np.ascontiguousarray(image, np.float32)
-    closed = cv2.morphologyEx(img, cv2.MORPH_CLOSE, np.ones((7, 7), np.uint8))
+    if closed is None:
+        closed = cv2.morphologyEx(img, cv2.MORPH_CLOSE, np.ones((7, 7), np.uint8))
     line = closed - img
     lift = closed - np.float32(mineral)
     deep = np.float32(config.AUTO_SEED_SIGMAS * noise)
@@ -326,6 +329,9 @@ def threshold_auto(image, *, area_fraction=config.AUTO_AREA_FRACTION,
     from . import _kernels
     img = np.asarray(image, np.float32)
     lv = dark_class_levels(img)
+    # a 7 x 7 grey closing fills every dark feature narrower than ~6 px: the narrow dark lines
+    # of the no-dark-class branch and of the candidates below lie well under it
+    closed = cv2.morphologyEx(img, cv2.MORPH_CLOSE, np.ones((7, 7), np.uint8))
     note0 = ""
     if not np.isfinite(lv.crack) or lv.n_dark < 10:
         # nothing darker than the darkest mineral phase (e.g. a dark biotite as dark as the
@@ -336,7 +342,7 @@ def threshold_auto(image, *, area_fraction=config.AUTO_AREA_FRACTION,
             crack = float(lo)
         else:  # the darkest mineral is as dark as the darkest crack pixels (thin cracks are
             # partial volumes): the crack grey is read on the narrow dark lines themselves
-            crack, share = line_crack_level(img, lv.mineral, lv.noise)
+            crack, share = line_crack_level(img, lv.mineral, lv.noise, closed=closed)
             if share < config.LINE_CRACK_MIN_SHARE:
                 m = np.zeros(img.shape, bool)
                 if share < config.LINE_WARN_SHARE:
@@ -349,8 +355,7 @@ def threshold_auto(image, *, area_fraction=config.AUTO_AREA_FRACTION,
         note0 = "no dark tail below the darkest mineral: cracks found as narrow dark lines"
     sn = lv.noise
     # exclude everything that might be crack (incl. its blurred rim) from the background:
-    # darker than the darkest mineral, or a narrow dark line that a grey closing fills in
-    closed = cv2.morphologyEx(img, cv2.MORPH_CLOSE, np.ones((7, 7), np.uint8))
+    # darker than the darkest mineral, or a narrow dark line that the grey closing fills in
     # (img < mineral - 3 sigma) | (line > k sn) & (line > f (closed - crack)), line = closed - img
     cand = np.empty(img.shape, bool)
     _kernels.crack_candidates(np.ascontiguousarray(img), closed,
