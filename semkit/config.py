@@ -38,6 +38,14 @@ AUTO_SEED_SIGMAS = 6.0
 #: when no crack is wide enough to show its core grey, the core is taken as this share of the
 #: darkest mineral's grey at most (BSE: epoxy/void is near black).
 THIN_ONLY_CRACK_RATIO = 0.3
+#: a crack shows its core grey when at least this many of the dark class's interior pixels sit
+#: in a flat 3 x 3 neighbourhood (grey range within FLAT_CORE_SIGMAS noise sigmas, or
+#: FLAT_CORE_CONTRAST of the contrast): a plateau. Across a blurred 1-3 px crack the grey rises
+#: on both sides of its darkest pixel, so it has no flat core, and its darkest grey is a partial
+#: volume, not the void grey (reading it as the crack grey inflates areas 1.3-3.8x).
+MIN_FLAT_CORE_PX = 10
+FLAT_CORE_SIGMAS = 4.0
+FLAT_CORE_CONTRAST = 0.15
 #: when nothing is darker than the darkest mineral, the crack grey is this low percentile.
 DARKEST_PERCENT = 0.2
 #: no pixel darker than the darkest mineral: narrow dark lines in the rock
@@ -310,6 +318,11 @@ REJECT_MAX_ZONE_SHARE = 0.2
 #: semkit.synth 1-px cracks 7-8 %, micro-CT tuning slices <= 4 %)
 FAINT_LINE_DEPTH = 0.2
 FAINT_MAX_LENGTH_SHARE = 0.2
+#: an image whose ridge lines continue its detected cracks (pixels of a ridge line touching a
+#: crack, more than 2 px from every detected pixel) for at least this many px per px of crack
+#: length is flagged: the cracks were found only in part (development family: the under-read
+#: images 0.15-0.19, every other image <= 0.045; 1-px hairlines blurred by 1.4 px: 14)
+CONTINUATION_MAX_SHARE = 0.1
 #: side of the grey closing giving an object's local background (fills cracks narrower), px
 ZONE_CLOSING_PX = 21
 #: side of the window of the detection density, px

@@ -40,6 +40,8 @@ class DarkLevels:
     seed: float         #: the dark-tail level, ``mineral - DARK_TAIL_SIGMAS * sigma``
     n_dark: int         #: pixels below ``seed``
     noise: float = float("nan")  #: pixel-noise sigma (:func:`noise_sigma`)
+    #: False when no crack is wide enough to show its core grey: ``crack`` is then assumed
+    resolved: bool = True
 
 
 @dataclasses.dataclass
@@ -201,20 +203,43 @@ def dark_class_levels(image) -> DarkLevels:
     tail = sub[sub < seed]
     n_dark = int(tail.size * a.size / max(sub.size, 1))
     crack = float("nan")
+    resolved = True
     if tail.size >= 20:
         # interior pixels of cracks >= 3 px wide carry the core grey; thin cracks only
         # partial volumes, so they are used only when there is no interior at all
         dark = (sub < seed).view(np.uint8)
         interior = cv2.erode(dark, np.ones((3, 3), np.uint8)).view(bool)
         core = sub[interior]
-        if core.size >= 20:
+        resolved = core.size >= 20 and _flat_core_count(
+            a, interior, step, max(config.FLAT_CORE_SIGMAS * sn, config.FLAT_CORE_CONTRAST
+                                   * (mineral - float(np.median(core))))) \
+            >= config.MIN_FLAT_CORE_PX
+        if resolved:
             crack = float(np.median(core))
         else:  # all cracks thin: their darkest values are partial volumes; the core is
             # assumed at least as dark as 30 % of the darkest mineral (epoxy / void in BSE)
             th, tc = _hist(tail, float(tail.min()), float(seed), bins=64)
             crack = min(float(tc[int(np.argmax(gaussian_filter1d(th, 1.5)))]),
                         config.THIN_ONLY_CRACK_RATIO * mineral)
-    return DarkLevels(mineral, float(sigma), crack, float(seed), n_dark, sn)
+    return DarkLevels(mineral, float(sigma), crack, float(seed), n_dark, sn, resolved=resolved)
+
+
+def _flat_core_count(image, interior, step, max_range):
+    """How many ``interior`` pixels (of the image subsampled by ``step``) have a flat 3 x 3
+    neighbourhood in the full image: grey range at most ``max_range``."""
+    rr, cc = np.nonzero(interior)
+    rr, cc = rr * step, cc * step
+    h, w = image.shape
+    ok = (rr > 0) & (cc > 0) & (rr < h - 1) & (cc < w - 1)
+    rr, cc = rr[ok], cc[ok]
+    lo = np.full(rr.size, np.inf, np.float32)
+    hi = np.full(rr.size, -np.inf, np.float32)
+    for i in (-1, 0, 1):
+        for j in (-1, 0, 1):
+            v = image[rr + i, cc + j]
+            np.minimum(lo, v, out=lo)
+            np.maximum(hi, v, out=hi)
+    return int(np.count_nonzero(hi - lo <= max_range))
 
 
 def line_crack_level(image, mineral, noise, *, closed=None):
@@ -387,6 +412,11 @@ def threshold_auto(image, *, area_fraction=config.AUTO_AREA_FRACTION,
     frac = float(area.mean())
     value = 0.5 * (lv.mineral + lv.crack)
     ok, note = _check_dark_class(img, area, frac, lv)
+    if not lv.resolved:
+        note0 = "; ".join(t for t in (note0, (
+            f"no crack shows its core grey (all are narrower than the blur): the crack grey "
+            f"is taken as {lv.crack:.4g}, at most {config.THIN_ONLY_CRACK_RATIO:g} x the darkest "
+            "mineral, and thin-crack areas scale with the contrast to it")) if t)
     note = "; ".join(t for t in (note0, note) if t)
     return ThresholdResult(area, detect, "auto", value, frac, ok, note, background=bg,
                            crack_level=lv.crack)
