@@ -79,6 +79,9 @@ class CrackAnalysis:
         if not pixel_size_um > 0:
             raise InputError(f"pixel_size_um: expected > 0, got {pixel_size_um}")
         self.options = options or AnalysisOptions()
+        if self.options.bright_cracks:
+            from .io import invert_grey
+            img = invert_grey(img)
         self.raw_image = img
         self.pixel_size_um = float(pixel_size_um)
         self.pixel_size_source = pixel_size_source
@@ -507,6 +510,11 @@ class CrackAnalysis:
             notes.append(f"faint lines: {faint:.0%} of the crack length lies less than "
                          f"{config.FAINT_LINE_DEPTH:g} of the crack contrast below its "
                          "surroundings (grain boundaries or faint cracks): check the overlay")
+        cont = self._continuation_share()
+        if cont >= config.CONTINUATION_MAX_SHARE:
+            notes.append(f"faint continuations: ridge lines carry on from the detected cracks "
+                         f"({cont:.2f} px per px of crack length) where the threshold found "
+                         "nothing: cracks were found only in part: check the overlay")
         share, by_rule = self._zone_rejected_share()
         if share >= config.REJECT_MAX_ZONE_SHARE:
             rules = ", ".join(f"{k} {v:.0%}" for k, v in by_rule.items())
@@ -525,6 +533,25 @@ class CrackAnalysis:
         length = c["length_px"].to_numpy()
         total = float(length.sum())
         return float(length[depth < config.FAINT_LINE_DEPTH].sum()) / total if total > 0 else 0.0
+
+    def _continuation_share(self):
+        """Pixels of ridge lines that touch the detected cracks but run on more than 2 px
+        from every detected pixel, per px of crack length (0 without the ridge detector, a
+        segmenter or a length): how much of the cracks' continuation was left out."""
+        if self.ridge is None or self.options.segmenter is not None \
+                or not self.options.length:
+            return 0.0
+        import cv2
+        ridge, _ = self.ridge
+        lab, keep = self._ridge_components
+        det = self.detection[0].view(np.uint8)
+        near = cv2.dilate(det, np.ones((3, 3), np.uint8)).view(bool)
+        touching = np.zeros(keep.size, bool)
+        touching[lab[near & ridge]] = True
+        touching[0] = False
+        far = ridge & touching[lab] & ~cv2.dilate(det, np.ones((5, 5), np.uint8)).view(bool)
+        length = float(self.cracks["length_px"].sum()) if not self.cracks.empty else 0.0
+        return float(np.count_nonzero(far)) / length if length > 0 else 0.0
 
     def _zone_rejected_share(self):
         """Share of the dark objects' area (pores aside) that the zone and shape rules
