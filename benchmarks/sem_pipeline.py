@@ -13,9 +13,10 @@ processes, no overlays), timed on the wall clock:
 * ``threshold only`` — ``--no-classify --no-ridge --no-reject`` (the pipeline before the
   ridge detector and the rejection rules).
 
-Throughput is total MP over wall time, and total MP over the analysis CPU time summed over
-the images (``cpu_seconds`` of ``images.csv``: per core, not inflated by other jobs on a busy
-machine; file reading is inside it, CSV writing and process start-up are not).
+Each run is repeated (``--repeat``, default 3, the runs interleaved) and the median wall
+time is quoted. Throughput is total MP over wall time, and total MP over the analysis CPU time
+summed over the images (``cpu_seconds`` of ``images.csv``: per core, not inflated by other
+jobs on a busy machine; file reading is inside it, CSV writing and process start-up are not).
 
 Errors against the truth, per image: total crack area and length (median and max |error|), and
 for the typed post-test images P = A_T / A_S (median |error|, largest, and how many P values
@@ -24,7 +25,8 @@ skeleton) is quoted at 3.2 MP/s, measured on the same kind of folder; it is not 
 
 Writes ``benchmarks/semkit_results/sem_pipeline.json`` and prints a markdown table.
 
-Run: ``python benchmarks/sem_pipeline.py [--jobs 2] [--quick]``
+Run: ``python benchmarks/sem_pipeline.py [--jobs 2] [--repeat 3] [--quick] [--images DIR]``
+(``--images DIR`` keeps the generated folder there and reuses it on the next run).
 """
 from __future__ import annotations
 
@@ -92,32 +94,56 @@ def main(argv=None) -> int:
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--quick", action="store_true", help="8 small + 4 large images")
     ap.add_argument("--out", default=str(pathlib.Path(__file__).parent / "semkit_results"))
+    ap.add_argument("--repeat", type=int, default=3, help="runs of each setting (median)")
+    ap.add_argument("--images", help="keep the generated folder here; reuse it when present")
     args = ap.parse_args(argv)
     sizes = SIZES[:8] + SIZES[20:24] if args.quick else SIZES
-    tmp = pathlib.Path(tempfile.mkdtemp(prefix="semkit_bench_"))
-    t0 = time.perf_counter()
-    import multiprocessing as mp
-    ctx = mp.get_context("forkserver")
-    with ProcessPoolExecutor(max_workers=args.jobs, mp_context=ctx) as ex:
-        truth = pd.DataFrame(list(ex.map(_make, range(len(sizes)), sizes, [tmp] * len(sizes))))
-    truth.assign(specimen="S1", test="ucs", pixel_size_um=1.0)[
-        ["image", "specimen", "test", "stage", "pixel_size_um"]].to_csv(tmp / "manifest.csv",
-                                                                        index=False)
-    print(f"generated {len(truth)} images in {time.perf_counter() - t0:.1f} s", file=sys.stderr)
+    keep = args.images is not None
+    tmp = pathlib.Path(args.images) if keep else pathlib.Path(
+        tempfile.mkdtemp(prefix="semkit_bench_"))
+    if keep and (tmp / "truth.csv").is_file() and len(pd.read_csv(tmp / "truth.csv")) == len(
+            sizes):
+        truth = pd.read_csv(tmp / "truth.csv")
+    else:
+        tmp.mkdir(parents=True, exist_ok=True)
+        t0 = time.perf_counter()
+        import multiprocessing as mp
+        ctx = mp.get_context("forkserver")
+        with ProcessPoolExecutor(max_workers=args.jobs, mp_context=ctx) as ex:
+            truth = pd.DataFrame(list(ex.map(_make, range(len(sizes)), sizes,
+                                             [tmp] * len(sizes))))
+        truth.assign(specimen="S1", test="ucs", pixel_size_um=1.0)[
+            ["image", "specimen", "test", "stage", "pixel_size_um"]].to_csv(
+                tmp / "manifest.csv", index=False)
+        truth.to_csv(tmp / "truth.csv", index=False)
+        print(f"generated {len(truth)} images in {time.perf_counter() - t0:.1f} s",
+              file=sys.stderr)
+    out_root = pathlib.Path(tempfile.mkdtemp(prefix="semkit_bench_out_"))
     total_mp = float((truth.height * truth.width).sum() / 1e6)
     from semkit.workflow import analyse_folder
     # warm the numba caches of the worker processes' code once
-    analyse_folder(tmp, tmp / "warm", jobs=1, progress=False, overlays=False)
+    analyse_folder(tmp, out_root / "warm", jobs=1, progress=False, overlays=False)
+    walls = {name: [] for name in RUNS}
+    cpus = {name: [] for name in RUNS}
+    loads = {name: [] for name in RUNS}
+    last = {}
+    for k in range(args.repeat):   # interleaved, so a load change hits every setting alike
+        for name, opts in RUNS.items():
+            loads[name].append(os.getloadavg()[0])
+            t1 = time.perf_counter()
+            images, _ = analyse_folder(tmp, out_root / f"{k}_{len(last)}", jobs=args.jobs,
+                                       progress=False, overlays=False, **opts)
+            walls[name].append(time.perf_counter() - t1)
+            cpus[name].append(float(images.cpu_seconds.sum()))
+            last[name] = images
     results = {}
     for name, opts in RUNS.items():
-        load = os.getloadavg()[0]
-        t1 = time.perf_counter()
-        images, _ = analyse_folder(tmp, tmp / f"out_{len(results)}", jobs=args.jobs,
-                                   progress=False, overlays=False, **opts)
-        wall = time.perf_counter() - t1
-        results[name] = dict(options=opts, wall_s=wall, mp_per_s=total_mp / wall,
-                             mp_per_cpu_s=total_mp / float(images.cpu_seconds.sum()),
-                             load_avg_1min_before=load, **_errors(images, truth))
+        wall = float(np.median(walls[name]))
+        results[name] = dict(options=opts, wall_s=wall, wall_s_runs=walls[name],
+                             mp_per_s=total_mp / wall,
+                             mp_per_cpu_s=total_mp / float(np.median(cpus[name])),
+                             load_avg_1min_before=loads[name],
+                             **_errors(last[name], truth))
     info = dict(n_images=len(truth), total_mp=total_mp, jobs=args.jobs,
                 cpu_count=os.cpu_count(), load_avg_1min=os.getloadavg()[0],
                 imagej_mp_per_s_quoted=IMAGEJ_MP_PER_S,
@@ -126,8 +152,8 @@ def main(argv=None) -> int:
     outdir.mkdir(parents=True, exist_ok=True)
     (outdir / "sem_pipeline.json").write_text(json.dumps(dict(info=info, results=results),
                                                          indent=2))
-    print(f"\n{len(truth)} images, {total_mp:.1f} MP, {args.jobs} processes, load avg "
-          f"{info['load_avg_1min']:.1f}\n")
+    print(f"\n{len(truth)} images, {total_mp:.1f} MP, {args.jobs} processes, median of "
+          f"{args.repeat} runs, load avg {info['load_avg_1min']:.1f}\n")
     print("| run | MP/s end to end | MP per CPU-s | area err median / max | "
           "length err median / max | P err median / max (n, not ok) |")
     print("|---|---|---|---|---|---|")
@@ -139,7 +165,9 @@ def main(argv=None) -> int:
               f"{v['length_err_median']:.1%} / {v['length_err_max']:.1%} | {p} |")
     print(f"| ImageJ thesis macro (quoted) | {IMAGEJ_MP_PER_S} | — | — | — | — |")
     import shutil
-    shutil.rmtree(tmp, ignore_errors=True)
+    shutil.rmtree(out_root, ignore_errors=True)
+    if not keep:
+        shutil.rmtree(tmp, ignore_errors=True)
     return 0
 
 

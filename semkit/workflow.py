@@ -246,8 +246,11 @@ def analyse_folder(folder, out, *, jobs=None, progress=True, overlays=True, pixe
                                  else "spawn")
             with ProcessPoolExecutor(max_workers=jobs, mp_context=ctx,
                                      initializer=_worker_init) as ex:
+                # largest files first: the last images to finish are small ones, so no
+                # worker idles long at the end (longest-processing-time-first scheduling)
+                by_size = sorted(files, key=lambda p: -p.stat().st_size)
                 futs = {ex.submit(analyse_file, p, manifest_row=mrows.get(p.name), **kw): p.name
-                        for p in files}
+                        for p in by_size}
                 for f in as_completed(futs):
                     try:
                         result = f.result()
