@@ -17,7 +17,8 @@ __all__ = ["main", "build_parser"]
 _ANALYSE_KEYS = ("threshold", "flatten", "denoise_sigma_px", "despeckle", "min_area_um2",
                  "max_hole_px", "length", "exclude_pores", "pixel_size_um", "jobs", "progress",
                  "overlays", "classify", "crack_model", "grains", "minerals", "classes",
-                 "labels", "roi", "ridge", "link", "reject", "save_masks", "segmenter")
+                 "labels", "roi", "ridge", "link", "reject", "save_masks", "segmenter",
+                 "bright_cracks")
 
 
 def _version():
@@ -65,6 +66,9 @@ def _add_analyse(sub):
     p.add_argument("--roi", default=None, metavar="auto|none|MASK.png",
                    help="sample region: auto (default: crop the SEM data bar, drop a black or "
                         "white surround), none, or a mask image (non-zero = sample)")
+    p.add_argument("--bright-cracks", dest="bright_cracks", action="store_true", default=None,
+                   help="cracks are brighter than the rock (fluorescent-dye sections): invert "
+                        "the grey image first")
     p.add_argument("--no-ridge", dest="ridge", action="store_false", default=None,
                    help="threshold only (no ridge detector for thin, faint cracks)")
     p.add_argument("--link", dest="link", action="store_true", default=None,

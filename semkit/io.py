@@ -25,9 +25,9 @@ import pandas as pd
 from . import config
 from .errors import InputError
 
-__all__ = ["LoadedImage", "read_image", "to_grey", "tiff_pixel_size", "magnification_pixel_size",
-           "read_manifest", "resolve_pixel_size", "load_image", "write_image", "write_csv_atomic",
-           "list_images", "list_folder"]
+__all__ = ["LoadedImage", "read_image", "to_grey", "invert_grey", "tiff_pixel_size",
+           "magnification_pixel_size", "read_manifest", "resolve_pixel_size", "load_image",
+           "write_image", "write_csv_atomic", "list_images", "list_folder"]
 
 _UNIT_UM = {"m": 1e6, "mm": 1e3, "um": 1.0, "µm": 1.0, "nm": 1e-3, "pm": 1e-6}
 
@@ -40,6 +40,25 @@ class LoadedImage:
     pixel_size_um: float
     pixel_size_source: str
     magnification: float | None = None
+
+
+def invert_grey(image) -> np.ndarray:
+    """Invert a grey image in its dtype's range (bright cracks become dark ones).
+
+    Integers: ``max - I`` with the dtype's maximum; floats: ``min + max - I`` (the image's own
+    range).
+
+    Examples
+    --------
+    >>> invert_grey(np.array([[0, 200]], np.uint8)).tolist()
+    [[255, 55]]
+    >>> invert_grey(np.array([[0.5, 2.0]])).tolist()
+    [[2.0, 0.5]]
+    """
+    a = np.asarray(image)
+    if np.issubdtype(a.dtype, np.integer):
+        return (np.iinfo(a.dtype).max - a).astype(a.dtype)
+    return (a.min() + a.max() - a).astype(a.dtype)
 
 
 def to_grey(image) -> np.ndarray:

@@ -60,6 +60,10 @@ class AnalysisOptions:
     roi : str
         Sample region: ``auto`` (data bar cropped, black / white surround removed), ``none``
         (whole image) or the path of a mask image (non-zero = sample); see :mod:`semkit.roi`.
+    bright_cracks : bool
+        Cracks are brighter than the rock (fluorescent-dye impregnated thin sections under
+        UV / blue light; some CT): the grey image is inverted before everything else
+        (:func:`semkit.io.invert_grey`), so overlays and masks show it inverted.
     """
 
     threshold: str = "auto"
@@ -80,6 +84,7 @@ class AnalysisOptions:
     link: bool = False
     reject: bool = True
     segmenter: object = None
+    bright_cracks: bool = False
 
     def __post_init__(self):
         from .classify import load_model
