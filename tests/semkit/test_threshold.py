@@ -185,3 +185,14 @@ def test_a_crack_with_a_flat_core_keeps_its_measured_grey():
     img, _ = _hairlines(6.0, 0.6, noise=3.0)
     lv = dark_class_levels(denoise(img.astype(np.float32)))
     assert lv.resolved and abs(lv.crack - 30.0) < 10.0
+
+
+def test_cracks_found_only_in_part_are_flagged():
+    """1-px hairlines blurred by 1.4 px: the threshold catches a fifth of their length, the
+    ridge lines carry on from it. The image was marked valid with area and length -78 %; the
+    continuation is now measured and the image flagged."""
+    from semkit.analysis import analyse_image
+    img, _ = _hairlines(1.0, 1.4, noise=3.0)
+    row = analyse_image(img, pixel_size_um=1.0, stage="failure", classify=False).summary()
+    assert row["crack_length_um"] < 0.5 * 6 * 924   # most of the length is missed ...
+    assert not row["valid"] and "faint continuations" in row["valid_note"]   # ... and said
