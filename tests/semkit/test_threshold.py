@@ -1,4 +1,7 @@
 """semkit.threshold and semkit.illumination: the auto method isolates the crack class."""
+import importlib.util
+import pathlib
+
 import numpy as np
 import pytest
 from _synth_cases import case
@@ -15,6 +18,12 @@ from semkit.threshold import (
     threshold_local,
     threshold_otsu,
 )
+
+# the clean line images live with their benchmark (one definition for the test and it)
+_spec = importlib.util.spec_from_file_location(
+    "line_family", pathlib.Path(__file__).resolve().parents[2] / "benchmarks" / "line_family.py")
+lines = importlib.util.module_from_spec(_spec)
+_spec.loader.exec_module(lines)
 
 
 def test_parse_method():
@@ -151,27 +160,13 @@ def test_too_few_lines_to_read_give_no_crack_but_a_flag(monkeypatch):
     assert r.ok and r.note == "no dark class" and not r.mask.any()
 
 
-def _hairlines(width, blur, noise, seed=0, shape=(768, 1024)):
-    """Six slanted hairline cracks (exact coverage, grey 30 in a 170 mineral), blurred."""
-    from scipy import ndimage as ndi
-    h, w = shape
-    yy, xx = np.mgrid[0:h, 0:w]
-    cov = np.zeros(shape)
-    for k, ang in enumerate((0.07, -0.11, 0.23, -0.3, 0.02, 0.15)):
-        d = np.abs((yy - (k + 0.5) * h / 6) * np.cos(ang) - (xx - w / 2) * np.sin(ang))
-        cov = np.maximum(cov, np.clip(width / 2 + 0.5 - d, 0, 1) * ((xx > 50) & (xx < w - 50)))
-    img = ndi.gaussian_filter(170.0 * (1 - cov) + 30.0 * cov, blur)
-    img += noise * np.random.default_rng(seed).standard_normal(shape)
-    return np.clip(np.rint(img), 0, 255).astype(np.uint8), float(cov.sum())
-
-
 @pytest.mark.parametrize("width,blur", [(1.5, 1.0), (2.0, 1.4), (3.0, 1.0)])
 def test_hairline_only_image_reads_no_partial_volume_as_the_crack_grey(width, blur):
     """Every crack 1.5-3 px wide and blurred: the darkest grey across each is a partial volume
     with no flat core. Read as the crack grey it inflated every area 1.3-2.1x (the image was
     marked valid); the crack grey is now assumed, said so, and areas are within 15 %."""
     from semkit.analysis import analyse_image
-    img, true_area = _hairlines(width, blur, noise=3.0)
+    img, true_area, _ = lines.hairlines(width, blur, noise=3.0)
     lv = dark_class_levels(denoise(img.astype(np.float32)))
     assert not lv.resolved
     a = analyse_image(img, pixel_size_um=1.0, stage="failure", classify=False)
@@ -182,7 +177,7 @@ def test_hairline_only_image_reads_no_partial_volume_as_the_crack_grey(width, bl
 
 def test_a_crack_with_a_flat_core_keeps_its_measured_grey():
     """6 px cracks show their void grey on a plateau: read there (near 30), not assumed."""
-    img, _ = _hairlines(6.0, 0.6, noise=3.0)
+    img, _, _ = lines.hairlines(6.0, 0.6, noise=3.0)
     lv = dark_class_levels(denoise(img.astype(np.float32)))
     assert lv.resolved and abs(lv.crack - 30.0) < 10.0
 
@@ -192,24 +187,10 @@ def test_cracks_found_only_in_part_are_flagged():
     ridge lines carry on from it. The image was marked valid with area and length -78 %; the
     continuation is now measured and the image flagged."""
     from semkit.analysis import analyse_image
-    img, _ = _hairlines(1.0, 1.4, noise=3.0)
+    img, _, length = lines.hairlines(1.0, 1.4, noise=3.0)
     row = analyse_image(img, pixel_size_um=1.0, stage="failure", classify=False).summary()
-    assert row["crack_length_um"] < 0.5 * 6 * 924   # most of the length is missed ...
+    assert row["crack_length_um"] < 0.5 * length   # most of the length is missed ...
     assert not row["valid"] and "faint continuations" in row["valid_note"]   # ... and said
-
-
-def _line_mix(blur, noise=8.0, seed=1, shape=(768, 1024)):
-    """Eight parallel cracks 1.5-8 px wide (grey 30 in a 170 mineral), blurred."""
-    from scipy import ndimage as ndi
-    h, w = shape
-    yy, xx = np.mgrid[0:h, 0:w]
-    cov = np.zeros(shape)
-    for k, width in enumerate((1.5, 2.0, 2.5, 3.0, 3.5, 4.0, 6.0, 8.0)):
-        d = np.abs((yy - (k + 0.5) * h / 8) * np.cos(0.05) - (xx - w / 2) * np.sin(0.05))
-        cov = np.maximum(cov, np.clip(width / 2 + 0.5 - d, 0, 1) * ((xx > 50) & (xx < w - 50)))
-    img = ndi.gaussian_filter(170.0 * (1 - cov) + 30.0 * cov, blur)
-    img += noise * np.random.default_rng(seed).standard_normal(shape)
-    return np.clip(np.rint(img), 0, 255).astype(np.uint8), float(cov.sum())
 
 
 def test_a_crack_grey_pulled_up_by_partly_resolved_cracks_is_flagged():
@@ -218,10 +199,10 @@ def test_a_crack_grey_pulled_up_by_partly_resolved_cracks_is_flagged():
     spread between all cores and the flat ones now flags it. Under a 0.6-px blur the grey is
     right, the areas within 5 %, and nothing is flagged."""
     from semkit.analysis import analyse_image
-    img, true_area = _line_mix(1.4)
+    img, true_area, _ = lines.line_mix(1.4)
     row = analyse_image(img, pixel_size_um=1.0, stage="failure", classify=False).summary()
     assert row["crack_area_um2"] / true_area > 1.1
     assert not row["valid"] and "partly resolved" in row["valid_note"]
-    img, true_area = _line_mix(0.6)
+    img, true_area, _ = lines.line_mix(0.6)
     row = analyse_image(img, pixel_size_um=1.0, stage="failure", classify=False).summary()
     assert row["valid"] and abs(row["crack_area_um2"] / true_area - 1) < 0.05
