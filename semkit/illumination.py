@@ -34,15 +34,13 @@ def _phase_offsets(r, keep):
     """Log-grey level of the phase (mineral) each pixel belongs to: peaks of the residual
     histogram, each pixel assigned to the nearest. Without this, a region rich in a bright
     mineral would pass for a brightly lit one."""
-    from scipy.ndimage import gaussian_filter1d
-
-    from .peaks import prominent_peaks
+    from .peaks import prominent_peaks, smooth_profile
     v = r[keep]
     lo, hi = np.percentile(v, [0.5, 99.5])
     if hi - lo < 0.1:  # phases differing by < ~10 % in grey are not told apart
         return np.zeros_like(r)
     h, e = np.histogram(v, bins=64, range=(lo, hi))
-    hs = gaussian_filter1d(h.astype(float), 1.5)
+    hs = smooth_profile(h.astype(float), 1.5)
     pk = prominent_peaks(np.r_[0.0, hs, 0.0], 0.05 * hs.max())
     c = 0.5 * (e[1:] + e[:-1])[pk - 1]
     if c.size > 1:  # merge peaks closer than 0.05 in log grey (5 %)

@@ -88,7 +88,6 @@ class AnalysisOptions:
 
     def __post_init__(self):
         from .classify import load_model
-        from .grains import parse_minerals
         from .roi import parse_roi
         from .threshold import parse_method
         parse_roi(self.roi)
@@ -96,6 +95,7 @@ class AnalysisOptions:
         if self.crack_model is not None:
             load_model(self.crack_model)
         if self.minerals is not None:
+            from .grains import parse_minerals  # the grain stages import scipy.ndimage
             parse_minerals(self.minerals)
         if self.flatten not in ("polynomial", "gaussian", "none"):
             raise InputError(f"flatten: expected polynomial, gaussian or none, "

@@ -160,9 +160,8 @@ def dark_class_levels(image) -> DarkLevels:
     class; the crack core level is the mode of that tail (the epoxy/void grey).
     """
     import cv2
-    from scipy.ndimage import gaussian_filter1d
 
-    from .peaks import prominent_peaks
+    from .peaks import prominent_peaks, smooth_profile
     a = np.asarray(image, np.float32)
     step = max(int(np.ceil(np.sqrt(a.size / 300_000))), 1)
     sub = np.ascontiguousarray(a[::step, ::step])
@@ -173,7 +172,7 @@ def dark_class_levels(image) -> DarkLevels:
     ksz = max(11 // step, 5) | 1
     closed = cv2.morphologyEx(sub, cv2.MORPH_CLOSE, np.ones((ksz, ksz), np.uint8))
     hc, c = _hist(closed.ravel(), lo, hi)
-    hcs = gaussian_filter1d(hc, 2.0)
+    hcs = smooth_profile(hc, 2.0)
     peaks = prominent_peaks(np.r_[0.0, hcs, 0.0], 0.01 * hcs.max())
     peaks = peaks - 1
     if peaks.size == 0:
@@ -187,7 +186,7 @@ def dark_class_levels(image) -> DarkLevels:
     # refine on the image's own histogram: the local maximum near the closed-image peak
     # (closing shifts a noisy level up by ~1-2 sigma)
     h, _ = _hist(sub.ravel(), lo, hi)
-    hs = gaussian_filter1d(h, 2.0)
+    hs = smooth_profile(h, 2.0)
     p0 = int(peaks[q])
     win = max(int(0.1 * len(hs)), 3)
     lo_i = max(bounds[q] - win // 2, 0)
@@ -223,7 +222,7 @@ def dark_class_levels(image) -> DarkLevels:
         else:  # all cracks thin: their darkest values are partial volumes; the core is
             # assumed at least as dark as 30 % of the darkest mineral (epoxy / void in BSE)
             th, tc = _hist(tail, float(tail.min()), float(seed), bins=64)
-            crack = min(float(tc[int(np.argmax(gaussian_filter1d(th, 1.5)))]),
+            crack = min(float(tc[int(np.argmax(smooth_profile(th, 1.5)))]),
                         config.THIN_ONLY_CRACK_RATIO * mineral)
     return DarkLevels(mineral, float(sigma), crack, float(seed), n_dark, sn, resolved=resolved,
                       flat_crack=flat_crack)

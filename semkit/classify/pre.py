@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import numpy as np
 import pandas as pd
-from scipy import ndimage as ndi
 
 from .. import config
 from ..errors import InputError
@@ -29,6 +28,7 @@ def _fill_grains(grain_labels):
         return g
     if not (g > 0).any():
         raise InputError("grain_labels: no grain pixels")
+    from scipy import ndimage as ndi  # the grain stages only (its import costs ~0.2 s)
     _, idx = ndi.distance_transform_edt(g == 0, return_indices=True)
     return g[idx[0], idx[1]]
 
@@ -88,6 +88,7 @@ def classify_pre(crack_labels, grain_labels, *, skeleton=None,
     bnd[:, :-1] |= g[:, 1:] != g[:, :-1]
     bnd[1:, :] |= g[1:, :] != g[:-1, :]
     bnd[:-1, :] |= g[1:, :] != g[:-1, :]
+    from scipy import ndimage as ndi
     d_bnd = ndi.distance_transform_edt(~bnd)
     half = ndi.distance_transform_edt(mask)
     rr, cc = np.nonzero(skel)
