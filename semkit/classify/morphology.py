@@ -105,16 +105,33 @@ def crack_groups(crack_labels, *, link_px=LINK_PX, small_px=SMALL_OBJECT_PX, are
     kind[small] = 2
     kind_img = kind[lab]
     big_mask = kind_img == 1
-    dist, near = cv2.distanceTransformWithLabels((~big_mask).view(np.uint8), cv2.DIST_L2, 5,
-                                                 labelType=cv2.DIST_LABEL_PIXEL)
-    src = np.zeros(int(near.max()) + 1, np.int64)
-    src[near[big_mask]] = lab[big_mask]
-    sel = kind_img == 2
-    ids, d, tgt = lab[sel], dist[sel], src[near[sel]]
-    order = np.lexsort((d, ids))
-    first = order[np.r_[True, ids[order][1:] != ids[order][:-1]]]
-    ok = d[first] <= link_px
-    group_of[ids[first][ok]] = tgt[first][ok]
+    # each small object looks for large ones in its own box, grown by the link distance and a
+    # margin: a large pixel outside lies more than link_px away in the chessboard metric, so
+    # further in the chamfer one, and every distance up to link_px reads as on the whole image
+    rr, cc = np.nonzero(kind_img == 2)
+    ids = lab[rr, cc]
+    order = np.argsort(ids, kind="stable")          # each object's pixels in raster order
+    ids, rr, cc = ids[order], rr[order], cc[order]
+    starts = np.flatnonzero(np.r_[True, ids[1:] != ids[:-1]])
+    ends = np.r_[starts[1:], ids.size]
+    grow = int(np.ceil(link_px)) + 3
+    h, w = lab.shape
+    for a, b in zip(starts, ends):
+        r, c = rr[a:b], cc[a:b]
+        r0, c0 = max(int(r.min()) - grow, 0), max(int(c.min()) - grow, 0)
+        r1, c1 = min(int(r.max()) + grow + 1, h), min(int(c.max()) + grow + 1, w)
+        bm = big_mask[r0:r1, c0:c1]
+        if not bm.any():
+            continue
+        dist, near = cv2.distanceTransformWithLabels(
+            np.ascontiguousarray(~bm).view(np.uint8), cv2.DIST_L2, 5,
+            labelType=cv2.DIST_LABEL_PIXEL)
+        d = dist[r - r0, c - c0]
+        k = int(np.argmin(d))                   # the first pixel at the least distance
+        if d[k] <= link_px:
+            src = np.zeros(int(near.max()) + 1, np.int64)
+            src[near[bm]] = lab[r0:r1, c0:c1][bm]
+            group_of[ids[a]] = src[near[r[k] - r0, c[k] - c0]]
     return group_of
 
 
