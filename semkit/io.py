@@ -105,9 +105,7 @@ def read_image(path) -> np.ndarray:
                          f"{', '.join(config.IMAGE_SUFFIXES)}")
     try:
         if suf in (".tif", ".tiff"):
-            import tifffile
-            with tifffile.TiffFile(path) as tif:
-                a = tif.pages.first.asarray()
+            a = _read_tiff(path)
         else:
             import cv2
             a = cv2.imread(str(path), cv2.IMREAD_UNCHANGED)
@@ -130,6 +128,23 @@ def read_image(path) -> np.ndarray:
                                or np.issubdtype(a.dtype, np.floating)):
         raise InputError(f"{path.name}: unsupported pixel type {a.dtype}")
     return a
+
+
+def _read_tiff(path):
+    """The first page of a TIFF: tifffile (with imagecodecs for LZW, Deflate, JPEG, ...);
+    when tifffile cannot decode it, OpenCV's libtiff; the first error when both fail."""
+    import tifffile
+    try:
+        with tifffile.TiffFile(path) as tif:
+            return tif.pages.first.asarray()
+    except Exception as e:  # noqa: BLE001 (a codec tifffile lacks may be in libtiff)
+        import cv2
+        a = cv2.imread(str(path), cv2.IMREAD_UNCHANGED)
+        if a is None:
+            raise e from None
+        if a.ndim == 3:
+            a = a[..., [2, 1, 0] + ([3] if a.shape[2] == 4 else [])]  # BGR -> RGB
+        return a
 
 
 def _parse_length_um(value, unit):

@@ -40,6 +40,26 @@ def test_png_tiff_8_16_bit_and_rgb(tmp_path):
     assert read_image(tmp_path / "e.jpg").shape == IMG.shape
 
 
+@pytest.mark.parametrize("compression", ["lzw", "zlib", "packbits"])
+def test_compressed_tiffs_as_sem_software_writes_them(tmp_path, compression):
+    """SEM software and ImageJ save LZW or Deflate TIFFs; an LZW tile failed with 'requires
+    the imagecodecs package' (a dependency now)."""
+    im16 = IMG.astype(np.uint16) * 257
+    for img, name in ((IMG, "a.tif"), (im16, "b.tif")):
+        tifffile.imwrite(tmp_path / name, img, compression=compression)
+        assert np.array_equal(read_image(tmp_path / name), img)
+
+
+def test_a_tiff_tifffile_cannot_decode_is_read_by_libtiff(tmp_path, monkeypatch):
+    """Without a codec in tifffile, OpenCV's libtiff reads the pixels."""
+    tifffile.imwrite(tmp_path / "a.tif", IMG, compression="lzw")
+
+    def no_codec(self, *a, **k):
+        raise ValueError("<COMPRESSION.LZW: 5> requires the 'imagecodecs' package")
+    monkeypatch.setattr(tifffile.TiffPage, "asarray", no_codec)
+    assert np.array_equal(read_image(tmp_path / "a.tif"), IMG)
+
+
 @pytest.mark.parametrize("name,content,match", [
     ("bad.png", b"this is not a png", "cannot read"),
     ("empty.tif", b"", "cannot read"),
