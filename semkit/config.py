@@ -228,6 +228,14 @@ SURROUND_TOL_FRACTION = 0.04
 ROI_MARGIN_PX = 3
 #: below this share of the image the sample region is flagged (roi_ok False)
 ROI_MIN_FRACTION = 0.2
+#: a burned-in annotation (scale bar, its box): a component of one extreme grey (0 or the pixel
+#: type's maximum) whose bounding box's outline lies at least ANNOT_OUTLINE_FILL in it, at least
+#: ANNOT_MIN_THICK_PX thick and ANNOT_MIN_LENGTH_PX long, and at most ANNOT_MAX_SHARE of the
+#: image's width and height (a surround or an undetected data bar is larger)
+ANNOT_OUTLINE_FILL = 0.95
+ANNOT_MIN_THICK_PX = 3
+ANNOT_MIN_LENGTH_PX = 12
+ANNOT_MAX_SHARE = 0.5
 
 # --- ridge detector (semkit.ridge) ---
 #: scales of the dark-ridge response, px

@@ -7,6 +7,8 @@ extreme grey (near the darkest or the brightest) that are connected to the image
 found only when it holds at least :data:`~semkit.config.SURROUND_MIN_BORDER_FRACTION` of the
 border. The region is the rest, holes filled, shrunk by :data:`~semkit.config.ROI_MARGIN_PX`
 (the blurred edge of the sample is dark against a black surround and would read as a crack).
+Burned-in annotations (:func:`find_annotations`: a scale bar drawn on the image, its box and
+its label, at exactly the darkest or brightest grey the pixel type holds) are left out too.
 ``--roi MASK.png``: a user mask (non-zero = sample); ``--roi none``: the whole image.
 
 Pixels outside the region are never cracks and count in no per-area figure. Before the
@@ -22,8 +24,8 @@ import numpy as np
 from . import config
 from .errors import InputError
 
-__all__ = ["SampleRegion", "find_sample_region", "read_roi_mask", "fill_outside",
-           "parse_roi"]
+__all__ = ["SampleRegion", "find_sample_region", "find_annotations", "read_roi_mask",
+           "fill_outside", "parse_roi"]
 
 
 @dataclasses.dataclass
@@ -36,7 +38,8 @@ class SampleRegion:
         True inside the sample.
     kind : str
         ``full`` (no surround found), ``surround`` (black or white surround removed),
-        ``user`` (a mask file) or ``none`` (``--roi none``).
+        ``annotation`` (only burned-in annotations removed), ``user`` (a mask file) or
+        ``none`` (``--roi none``).
     fraction : float
         Share of the image inside.
     ok : bool
@@ -70,8 +73,75 @@ def _finish(mask, kind, note=""):
     return SampleRegion(mask, kind, frac, ok, note)
 
 
+def find_annotations(image):
+    """Burned-in annotations: scale bars, their boxes and labels drawn on the image.
+
+    They are drawn at exactly the darkest or brightest grey the pixel type holds (0, or 255 /
+    65535). A *box* is a component of one such grey whose bounding box's outline lies at least
+    ``ANNOT_OUTLINE_FILL`` in it (a filled bar, or a frame with a label inside), at least
+    ``ANNOT_MIN_THICK_PX`` thick and ``ANNOT_MIN_LENGTH_PX`` long, and at most
+    ``ANNOT_MAX_SHARE`` of the image's width and height. The annotation is each box's bounding
+    box with the extreme-grey components (the label's glyphs) whose own boxes lie within one
+    box length of it, grown by 2 px (the drawing's antialiased edge). Rock does not draw an
+    axis-aligned rectangle of one exact grey; a clipped crack, pore or surround is not one.
+    Float images have no such grey: nothing is found.
+
+    Parameters
+    ----------
+    image : (M, N) ndarray
+
+    Returns
+    -------
+    mask : (M, N) ndarray of bool
+        The annotations.
+    n_boxes : int
+
+    Examples
+    --------
+    >>> img = np.full((60, 80), 120, np.uint8); img[50:54, 40:75] = 0   # a scale bar
+    >>> m, n = find_annotations(img); n, bool(m[52, 50]), bool(m[20, 20])
+    (1, True, False)
+    """
+    import cv2
+    a = np.asarray(image)
+    out = np.zeros(a.shape, bool)
+    if a.ndim != 2 or not np.issubdtype(a.dtype, np.integer):
+        return out, 0
+    h, w = a.shape
+    boxes, parts = [], []
+    for v in (0, np.iinfo(a.dtype).max):
+        m = a == v
+        if np.count_nonzero(m) < config.ANNOT_MIN_LENGTH_PX * config.ANNOT_MIN_THICK_PX:
+            continue
+        n, lab, st, _ = cv2.connectedComponentsWithStats(m.view(np.uint8), connectivity=8)
+        x, y, bw, bh = (st[1:, k] for k in (cv2.CC_STAT_LEFT, cv2.CC_STAT_TOP,
+                                            cv2.CC_STAT_WIDTH, cv2.CC_STAT_HEIGHT))
+        parts.append(np.stack([x, y, bw, bh], axis=1))
+        cand = np.flatnonzero((np.minimum(bw, bh) >= config.ANNOT_MIN_THICK_PX)
+                              & (np.maximum(bw, bh) >= config.ANNOT_MIN_LENGTH_PX)
+                              & (bw <= config.ANNOT_MAX_SHARE * w)
+                              & (bh <= config.ANNOT_MAX_SHARE * h))
+        for i in cand:
+            sub = lab[y[i]:y[i] + bh[i], x[i]:x[i] + bw[i]] == i + 1
+            outline = np.r_[sub[0], sub[-1], sub[1:-1, 0], sub[1:-1, -1]]
+            if outline.mean() >= config.ANNOT_OUTLINE_FILL:
+                boxes.append((x[i], y[i], bw[i], bh[i]))
+    if not boxes:
+        return out, 0
+    parts = np.concatenate(parts)
+    for x0, y0, bw0, bh0 in boxes:
+        reach = max(bw0, bh0)
+        lo_x, lo_y, hi_x, hi_y = x0 - reach, y0 - reach, x0 + bw0 + reach, y0 + bh0 + reach
+        near = ((parts[:, 0] >= lo_x) & (parts[:, 1] >= lo_y)
+                & (parts[:, 0] + parts[:, 2] <= hi_x) & (parts[:, 1] + parts[:, 3] <= hi_y))
+        for px, py, pw, ph in np.concatenate([[(x0, y0, bw0, bh0)], parts[near]]):
+            out[max(py - 2, 0):py + ph + 2, max(px - 2, 0):px + pw + 2] = True
+    return out, len(boxes)
+
+
 def find_sample_region(image, *, noise=None):
-    """Find the sample inside a (data-bar-free) image: everything but a flat surround.
+    """Find the sample inside a (data-bar-free) image: everything but a flat surround and
+    burned-in annotations (:func:`find_annotations`).
 
     Parameters
     ----------
@@ -91,6 +161,19 @@ def find_sample_region(image, *, noise=None):
     >>> r = find_sample_region(img); r.kind, round(r.fraction, 2)
     ('surround', 0.58)
     """
+    mask, kind, note = _surround(image, noise)
+    ann, n_boxes = find_annotations(image)
+    if n_boxes and (ann & mask).any():
+        mask = mask & ~ann
+        kind = "annotation" if kind == "full" else kind
+        note = "; ".join(t for t in (note, f"{n_boxes} burned-in annotation(s) left out (a "
+                                     f"scale bar, its box or label: {ann.mean():.1%} of the "
+                                     "image)") if t)
+    return _finish(mask, kind, note)
+
+
+def _surround(image, noise):
+    """``(mask, kind, note)`` of :func:`find_sample_region` without the annotations."""
     import cv2
 
     from .threshold import noise_sigma
@@ -98,11 +181,11 @@ def find_sample_region(image, *, noise=None):
     h, w = a.shape
     full = np.ones(a.shape, bool)
     if h < 16 or w < 16:
-        return _finish(full, "full")
+        return full, "full", ""
     sn = noise_sigma(a) if noise is None else float(noise)
     lo, hi = float(a.min()), float(a.max())
     if hi <= lo:
-        return _finish(full, "full")
+        return full, "full", ""
     tol = max(config.SURROUND_TOL_SIGMAS * sn, config.SURROUND_TOL_FRACTION * (hi - lo))
     sm = cv2.GaussianBlur(a, (0, 0), 1.0)
     border = np.concatenate([sm[0], sm[-1], sm[1:-1, 0], sm[1:-1, -1]])
@@ -120,7 +203,7 @@ def find_sample_region(image, *, noise=None):
         if best is None or frac_b > best[1]:
             best = (level, frac_b)
     if best is None:
-        return _finish(full, "full")
+        return full, "full", ""
     cand = np.abs(sm - best[0]) <= tol
     n, lab = cv2.connectedComponents(cand.view(np.uint8), connectivity=8)
     edge = np.unique(np.concatenate([lab[0], lab[-1], lab[:, 0], lab[:, -1]]))
@@ -142,7 +225,7 @@ def find_sample_region(image, *, noise=None):
         keep = np.r_[False, st[1:, cv2.CC_STAT_AREA] >= 0.05 * big]
         inside = keep[lab]
     side = "black" if best[0] == lo else "white"
-    return _finish(inside, "surround", f"{side} surround removed ({1 - inside.mean():.0%})")
+    return inside, "surround", f"{side} surround removed ({1 - inside.mean():.0%})"
 
 
 def read_roi_mask(path, shape):

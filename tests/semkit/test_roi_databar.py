@@ -173,3 +173,43 @@ def test_a_noisy_image_of_large_uniform_grains_has_no_data_bar():
         blur_sigma=0.6249526982238409, boundary_depth=0.2872217922767762, bit_depth=16,
         widths=(1.520780323502206, 4.258389270990163), mean_grain_px=108.51410994725072)
     assert find_data_bar(s.image) is None
+
+
+@pytest.mark.parametrize("style", ["black bar", "white bar", "black bar in a white box"])
+def test_a_burned_in_scale_bar_is_left_out(style):
+    """A scale bar drawn on the image (optical micrographs, exported SEM images) added its
+    pixels and its label's to the cracks (+20 % area, and the image flagged for a crack grey it
+    does not have); it is found and left out of the sample region."""
+    import cv2
+
+    from semkit.roi import find_annotations
+    s = make_sem_image((768, 1024), stage="pre", n_cracks=10, widths=(2, 6), seed=11)
+    clean = analyse_image(s.image, pixel_size_um=1.0, stage="pre-test").summary()
+    img = s.image.copy()
+    ink, paper = (255, 0) if style == "white bar" else (0, 255)
+    if style.endswith("box"):
+        cv2.rectangle(img, (820, 700), (1000, 750), paper, -1)
+    cv2.rectangle(img, (840, 730), (980, 738), ink, -1)
+    cv2.putText(img, "100 um", (860, 722), cv2.FONT_HERSHEY_SIMPLEX, 0.6, ink, 2)
+    mask, n = find_annotations(img)
+    assert n >= 1 and mask[734, 900] and mask[715, 880] and not mask[300, 500]
+    a = analyse_image(img, pixel_size_um=1.0, stage="pre-test")
+    row = a.summary()
+    assert row["roi"] == "annotation" and "annotation" in a.region.note
+    assert row["valid"] and abs(row["crack_area_um2"] / clean["crack_area_um2"] - 1) < 0.01
+
+
+def test_surrounds_clipped_cracks_and_pores_are_not_annotations():
+    """A black surround at exactly 0, cracks and pores clipped to 0 are not drawn boxes
+    (only an axis-aligned rectangle of one exact grey is)."""
+    from semkit.roi import find_annotations
+    yy, xx = np.mgrid[:300, :400]
+    img = np.where((yy - 150) ** 2 + (xx - 200) ** 2 < 140 ** 2, 150, 0).astype(np.uint8)
+    img[(np.abs(yy - 0.035 * xx - 110) < 3) & (xx > 100) & (xx < 300)] = 0   # 2 degrees off
+    img[(np.abs(yy - 0.3 * xx - 150) < 2) & (xx > 100) & (xx < 300)] = 0    # slanted
+    img[((yy - 200) / 5.0) ** 2 + ((xx - 150) / 12.0) ** 2 < 1] = 0          # a pore
+    img[(np.abs(yy - 60 - 20 * np.sin(xx / 30.0)) < 3) & (xx > 120) & (xx < 280)] = 0
+    mask, n = find_annotations(img)
+    assert n == 0 and not mask.any()
+    img[140:146, 100:120] = 0          # the same at exactly one grey, axis-aligned: a box
+    assert find_annotations(img)[1] == 1
