@@ -85,9 +85,9 @@ def score_image(seed, shape, **options):
     return out
 
 
-def confidently_wrong(rows):
-    """Seeds of the rows marked ``valid`` whose area or length error exceeds ``WRONG``."""
-    return [r["seed"] for r in rows
+def confidently_wrong(rows, key="seed"):
+    """``key`` of the rows marked ``valid`` whose area or length error exceeds ``WRONG``."""
+    return [r[key] for r in rows
             if r["valid"] and max(abs(r["area_err"]), abs(r["length_err"])) > WRONG]
 
 

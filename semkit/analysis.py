@@ -535,9 +535,12 @@ class CrackAnalysis:
         return float(length[depth < config.FAINT_LINE_DEPTH].sum()) / total if total > 0 else 0.0
 
     def _continuation_share(self):
-        """Pixels of ridge lines that touch the detected cracks but run on more than 2 px
+        """Pixels of ridge lines that touch a detected object but run on more than 2 px
         from every detected pixel, per px of crack length (0 without the ridge detector, a
-        segmenter or a length): how much of the cracks' continuation was left out."""
+        segmenter or a length): how much of the cracks' continuation was left out. Objects
+        the rules rejected count as detected: a crack in a dark mineral rejected as
+        ``dark_phase`` and carried on by a ridge line is a crack found in part (development
+        seed 10: 0.18; counting accepted cracks only, 0.07)."""
         if self.ridge is None or self.options.segmenter is not None \
                 or not self.options.length:
             return 0.0

@@ -335,7 +335,7 @@ FAINT_MAX_LENGTH_SHARE = 0.2
 #: an image whose ridge lines continue its detected cracks (pixels of a ridge line touching a
 #: crack, more than 2 px from every detected pixel) for at least this many px per px of crack
 #: length is flagged: the cracks were found only in part (development family: the under-read
-#: images 0.15-0.19, every other image <= 0.045; 1-px hairlines blurred by 1.4 px: 14)
+#: images 0.15-0.19, every other image <= 0.045; 1-px hairlines blurred by 1.4 px: 14.5)
 CONTINUATION_MAX_SHARE = 0.1
 #: side of the grey closing giving an object's local background (fills cracks narrower), px
 ZONE_CLOSING_PX = 21

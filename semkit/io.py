@@ -107,12 +107,9 @@ def read_image(path) -> np.ndarray:
         if suf in (".tif", ".tiff"):
             a = _read_tiff(path)
         else:
-            import cv2
-            a = cv2.imread(str(path), cv2.IMREAD_UNCHANGED)
+            a = _read_cv2(path)
             if a is None:
                 raise ValueError("decoder returned nothing")
-            if a.ndim == 3:
-                a = a[..., [2, 1, 0] + ([3] if a.shape[2] == 4 else [])]  # BGR -> RGB
     except InputError:
         raise
     except Exception as e:  # noqa: BLE001 (any decoder failure is a bad file)
@@ -138,13 +135,19 @@ def _read_tiff(path):
         with tifffile.TiffFile(path) as tif:
             return tif.pages.first.asarray()
     except Exception as e:  # noqa: BLE001 (a codec tifffile lacks may be in libtiff)
-        import cv2
-        a = cv2.imread(str(path), cv2.IMREAD_UNCHANGED)
+        a = _read_cv2(path)
         if a is None:
             raise e from None
-        if a.ndim == 3:
-            a = a[..., [2, 1, 0] + ([3] if a.shape[2] == 4 else [])]  # BGR -> RGB
         return a
+
+
+def _read_cv2(path):
+    """An image file through OpenCV, channels as RGB(A); None when it cannot decode it."""
+    import cv2
+    a = cv2.imread(str(path), cv2.IMREAD_UNCHANGED)
+    if a is not None and a.ndim == 3:
+        a = a[..., [2, 1, 0] + ([3] if a.shape[2] == 4 else [])]  # BGR -> RGB
+    return a
 
 
 def _parse_length_um(value, unit):

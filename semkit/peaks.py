@@ -81,8 +81,8 @@ def smooth_profile(x, sigma, truncate=4.0):
     k = np.arange(-r, r + 1)
     w = np.exp(-0.5 / (float(sigma) * float(sigma)) * k ** 2)
     w = w / w.sum()
-    if x.size == 0 or r == 0:
-        return x * w[r] if r == 0 else x.copy()
+    if x.size == 0 or r == 0:   # a one-tap kernel of weight 1: the profile itself
+        return x.copy()
     # scipy's 'reflect' is NumPy's 'symmetric'; pad as far as the kernel reaches, repeating the
     # reflection for profiles shorter than the kernel
     xp = np.pad(x, r, mode="symmetric")

@@ -183,9 +183,10 @@ def test_a_crack_with_a_flat_core_keeps_its_measured_grey():
 
 
 def test_cracks_found_only_in_part_are_flagged():
-    """1-px hairlines blurred by 1.4 px: the threshold catches a fifth of their length, the
-    ridge lines carry on from it. The image was marked valid with area and length -78 %; the
-    continuation is now measured and the image flagged."""
+    """1-px hairlines blurred by 1.4 px: with the crack grey assumed (no flat core), the
+    threshold catches a fifth of their length and the ridge lines carry on from it; the image
+    read area -75 %, length -78 % and was marked valid. The continuation is now measured and
+    the image flagged."""
     from semkit.analysis import analyse_image
     img, _, length = lines.hairlines(1.0, 1.4, noise=3.0)
     row = analyse_image(img, pixel_size_um=1.0, stage="failure", classify=False).summary()
