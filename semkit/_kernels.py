@@ -25,6 +25,53 @@ def njit_exact(fn):
 
 
 @njit
+def pixel_coords(mask):
+    """Row and column (int64, raster order) of the nonzero pixels of a 2-D array: what
+    ``np.nonzero`` returns, several times faster on a large image.
+
+    Examples
+    --------
+    >>> m = np.zeros((3, 4), bool); m[1, 2] = m[2, 0] = True
+    >>> [a.tolist() for a in pixel_coords(m)]
+    [[1, 2], [2, 0]]
+    """
+    h, w = mask.shape
+    n = 0
+    for i in range(h):
+        for j in range(w):
+            if mask[i, j]:
+                n += 1
+    rr = np.empty(n, np.int64)
+    cc = np.empty(n, np.int64)
+    k = 0
+    for i in range(h):
+        for j in range(w):
+            if mask[i, j]:
+                rr[k] = i
+                cc[k] = j
+                k += 1
+    return rr, cc
+
+
+@njit
+def lookup(table, labels):
+    """``table[labels]`` for a 2-D label image: each pixel takes its label's entry (what
+    NumPy's fancy indexing gives, about twice as fast on a large image).
+
+    Examples
+    --------
+    >>> [r.tolist() for r in lookup(np.array([False, True]), np.array([[0, 1], [1, 0]]))]
+    [[False, True], [True, False]]
+    """
+    h, w = labels.shape
+    out = np.empty((h, w), table.dtype)
+    for i in range(h):
+        for j in range(w):
+            out[i, j] = table[labels[i, j]]
+    return out
+
+
+@njit
 def polyline_excess(xs, ys, ws, ox, oy, out):
     """Distance excess of each pixel over a polyline of varying width, written in place.
 
@@ -373,61 +420,71 @@ def label_extent(labels, n_labels, cos_t, sin_t, pmin, pmax):
 
 
 @njit
-def fill_background(img, known, rows, cols, ring, n_rings, band, out):
-    """Fill the grey level under excluded (dark) pixels from their known neighbours, in place.
+def fill_excluded(img, exclude, n_rings, band):
+    """Grey under the excluded pixels, filled ring by ring from their known neighbours.
+
+    Ring 1 holds the excluded pixels with a known 8-neighbour, ring r + 1 the unvisited
+    excluded neighbours of ring r: the chessboard distance to the known pixels, found by a
+    breadth-first search over the excluded pixels (no distance transform, no pixel list).
+    Each ring is decided as a whole, then applied: a pixel takes the mean of its known 3 x 3
+    neighbours within ``band`` of the darkest of them, so at a phase boundary the rim of a
+    crack takes the grey of one phase, never a mix. Each pixel is visited once.
 
     Parameters
     ----------
     img : (H, W) float32
-        Grey image.
-    known : (H, W) uint8
-        1 where the pixel's own grey is background; pixels filled here are set to 1.
-    rows, cols : (K,) int64
-        The excluded pixels (known == 0), none on the image border.
-    ring : (K,) int64
-        Chessboard distance of each excluded pixel to the nearest known pixel: the ring that
-        fills it (a ring fills every pixel with a known neighbour, so ring r fills exactly the
-        pixels at distance r).
+    exclude : (H, W) bool
     n_rings : int
-        Rings filled inward from the known pixels.
     band : float
-        Of the known 3 x 3 neighbours, those within ``band`` of the darkest are averaged: at a
-        phase boundary the rim of a crack thus takes the grey of one phase, never a mix.
-    out : (H, W) float32
-        Receives the filled values at the filled pixels (others untouched).
 
     Returns
     -------
+    val : (H, W) float32
+        ``img`` with the filled pixels replaced.
+    known : (H, W) uint8
+        1 where ``val`` holds a grey (known or filled), 0 where still unfilled.
     n_left : int
         Excluded pixels still unfilled after ``n_rings`` rings.
-
-    Notes
-    -----
-    Each pixel is visited once, in its ring (the pixels are bucketed by ring first).
     """
-    k = rows.shape[0]
-    count = np.zeros(n_rings + 2, np.int64)
-    for p in range(k):
-        r = ring[p]
-        if r >= 1 and r <= n_rings:
-            count[r] += 1
-    start = np.zeros(n_rings + 2, np.int64)
-    for r in range(1, n_rings + 1):
-        start[r + 1] = start[r] + count[r]
-    order = np.empty(start[n_rings + 1], np.int64)
-    fill = start.copy()
-    for p in range(k):
-        r = ring[p]
-        if r >= 1 and r <= n_rings:
-            order[fill[r]] = p
-            fill[r] += 1
+    h, w = img.shape
+    out = np.zeros((h + 2, w + 2), np.float32)
+    known = np.zeros((h + 2, w + 2), np.uint8)
+    k = 0
+    for i in range(h):
+        for j in range(w):
+            out[i + 1, j + 1] = img[i, j]
+            if exclude[i, j]:
+                k += 1
+            else:
+                known[i + 1, j + 1] = 1
+    seen = known.copy()
+    front_r = np.empty(k, np.int64)
+    front_c = np.empty(k, np.int64)
+    nf = 0
+    for i in range(1, h + 1):
+        for j in range(1, w + 1):
+            if known[i, j]:
+                continue
+            hit = False
+            for di in range(-1, 2):
+                for dj in range(-1, 2):
+                    if known[i + di, j + dj]:
+                        hit = True
+            if hit:
+                front_r[nf] = i
+                front_c[nf] = j
+                seen[i, j] = 1
+                nf += 1
+    next_r = np.empty(k, np.int64)
+    next_c = np.empty(k, np.int64)
     newv = np.empty(k, np.float32)
     n_done = 0
     for r in range(1, n_rings + 1):
-        for q in range(start[r], start[r + 1]):
-            p = order[q]
-            i = rows[p]
-            j = cols[p]
+        if nf == 0:
+            break
+        for q in range(nf):
+            i = front_r[q]
+            j = front_c[q]
             newv[q] = np.float32(np.nan)
             m = np.float32(1e30)
             for di in range(-1, 2):
@@ -444,14 +501,28 @@ def fill_background(img, known, rows, cols, ring, n_rings, band, out):
                         sm += out[i + di, j + dj]
                         c += 1
             newv[q] = sm / c
-        # apply after deciding the whole ring (parallel semantics)
-        for q in range(start[r], start[r + 1]):
-            p = order[q]
+        nn = 0
+        for q in range(nf):  # apply after deciding the whole ring (parallel semantics)
+            i = front_r[q]
+            j = front_c[q]
             if newv[q] == newv[q]:
-                out[rows[p], cols[p]] = newv[q]
-                known[rows[p], cols[p]] = 1
+                out[i, j] = newv[q]
+                known[i, j] = 1
                 n_done += 1
-    return k - n_done
+            if r < n_rings:
+                for di in range(-1, 2):
+                    for dj in range(-1, 2):
+                        ii = i + di
+                        jj = j + dj
+                        if ii >= 1 and ii <= h and jj >= 1 and jj <= w and not seen[ii, jj]:
+                            seen[ii, jj] = 1
+                            next_r[nn] = ii
+                            next_c[nn] = jj
+                            nn += 1
+        front_r, next_r = next_r, front_r
+        front_c, next_c = next_c, front_c
+        nf = nn
+    return out[1:-1, 1:-1].copy(), known[1:-1, 1:-1].copy(), k - n_done
 
 
 @njit

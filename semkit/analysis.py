@@ -371,7 +371,8 @@ class CrackAnalysis:
         keep[self.cracks["crack_id"].to_numpy()] = True
         if keep[1:].all():
             return self.labels
-        return np.where(keep[self.labels], self.labels, 0).astype(np.int32, copy=False)
+        from ._kernels import lookup
+        return np.where(lookup(keep, self.labels), self.labels, 0).astype(np.int32, copy=False)
 
     # stage 8: grains
     @functools.cached_property
@@ -545,6 +546,8 @@ class CrackAnalysis:
                 or not self.options.length:
             return 0.0
         import cv2
+
+        from ._kernels import lookup
         ridge, _ = self.ridge
         lab, keep = self._ridge_components
         det = self.detection[0].view(np.uint8)
@@ -552,7 +555,7 @@ class CrackAnalysis:
         touching = np.zeros(keep.size, bool)
         touching[lab[near & ridge]] = True
         touching[0] = False
-        far = ridge & touching[lab] & ~cv2.dilate(det, np.ones((5, 5), np.uint8)).view(bool)
+        far = ridge & lookup(touching, lab) & ~cv2.dilate(det, np.ones((5, 5), np.uint8)).view(bool)
         length = float(self.cracks["length_px"].sum()) if not self.cracks.empty else 0.0
         return float(np.count_nonzero(far)) / length if length > 0 else 0.0
 

@@ -60,16 +60,18 @@ def remove_specks(mask, *, max_side_px=config.SPECK_MAX_SIDE_PX,
     >>> int(remove_specks(m).sum())
     18
     """
+    from ._kernels import lookup
     from .measure import label_cracks, object_moments
     lab, n = label_cracks(mask)
     area, _, _, _, _, _, bw, bh = object_moments(lab, n)
     drop = (bw <= max_side_px) & (bh <= max_side_px) & (area <= max_area_px)
     drop[0] = True
-    return ~drop[lab]
+    return lookup(~drop, lab)
 
 
 def remove_small_objects(mask, *, min_area_px):
     """Remove 8-connected objects with fewer than ``min_area_px`` pixels."""
+    from ._kernels import lookup
     from .measure import label_cracks
     if min_area_px <= 1:
         return np.asarray(mask, bool).copy()
@@ -77,7 +79,7 @@ def remove_small_objects(mask, *, min_area_px):
     area = np.bincount(lab.ravel(), minlength=n + 1)
     keep = area >= min_area_px
     keep[0] = False
-    return keep[lab]
+    return lookup(keep, lab)
 
 
 def fill_holes(mask, *, max_hole_px=None):
@@ -97,6 +99,8 @@ def fill_holes(mask, *, max_hole_px=None):
     True
     """
     import cv2
+
+    from ._kernels import lookup
     m = np.asarray(mask, bool)
     if not m.any():
         return m.copy()
@@ -120,7 +124,7 @@ def fill_holes(mask, *, max_hole_px=None):
         area = object_moments(lab, n - 1)[0]
         fill &= area <= max_hole_px
     fill[0] = False
-    return m | fill[lab]
+    return m | lookup(fill, lab)
 
 
 def bridge_gaps(mask):

@@ -166,7 +166,8 @@ def _partial_volume_kernel(image, lab, n, background, crack_level, rim_px, ids):
         sel[np.asarray(ids, np.int64)] = True
         sel[0] = False
     rim = max(int(rim_px), 0)
-    near = sel[lab].view(np.uint8)
+    from ._kernels import lookup
+    near = lookup(sel, lab).view(np.uint8)
     if rim:
         near = cv2.dilate(near, np.ones((2 * rim + 1, 2 * rim + 1), np.uint8))
     out = np.zeros(size, np.float64)

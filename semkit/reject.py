@@ -206,7 +206,9 @@ def object_evidence(labels, n, grey, *, crack_level, noise, skeleton=None, regio
         at = np.flatnonzero(holes)
         hole_of = hl.ravel()[at]
         owner = np.zeros(nh, np.int64)
-        np.maximum.at(owner, hole_of, _grow(lab, 1).ravel()[at].astype(np.int64))
+        nxt = _grow(lab, 1).ravel()[at]   # only the hole's rim touches an object
+        rim = nxt > 0
+        np.maximum.at(owner, hole_of[rim], nxt[rim].astype(np.int64))
         encloses = np.bincount(owner[1:], weights=np.bincount(hole_of, minlength=nh)[1:],
                                minlength=n + 1)[:n + 1]
         hole_grey = _label_percentiles(g.ravel()[at], owner[hole_of], n, (50.0,), std=False)[0][0]

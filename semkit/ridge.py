@@ -147,9 +147,10 @@ def ridge_mask(image, *, crack_level, region=None, sigmas=config.RIDGE_SIGMAS_PX
     keep = np.zeros(n, bool)
     keep[lab[seed]] = True
     keep[0] = False
+    mask = _kernels.lookup(keep, lab)
     if return_components:
-        return keep[lab], depth, (lab, keep)
-    return keep[lab], depth
+        return mask, depth, (lab, keep)
+    return mask, depth
 
 
 def add_ridge_lines(detect, area, ridge, depth, components=None):
@@ -176,6 +177,8 @@ def add_ridge_lines(detect, area, ridge, depth, components=None):
     detect, area : (M, N) ndarray of bool
     """
     import cv2
+
+    from . import _kernels
     if components is None:
         n, lab = cv2.connectedComponents(ridge.view(np.uint8), connectivity=8)
         touch = np.zeros(n, bool)
@@ -185,5 +188,5 @@ def add_ridge_lines(detect, area, ridge, depth, components=None):
     near = cv2.dilate(detect.view(np.uint8), np.ones((3, 3), np.uint8)).view(bool)
     touch[lab[near & ridge]] = True
     touch[0] = True
-    new = ~touch[lab]
+    new = _kernels.lookup(~touch, lab)
     return detect | new, area | (new & (depth >= config.AUTO_AREA_FRACTION))

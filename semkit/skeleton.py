@@ -76,8 +76,8 @@ def skeletonize(mask):
     c0, c1 = cols[0], cols[-1] + 1
     sk = np.zeros((r1 - r0 + 2, c1 - c0 + 2), np.uint8)
     sk[1:-1, 1:-1] = m[r0:r1, c0:c1]
-    rr, cc = np.nonzero(sk)
-    _kernels.thin_pixels(sk, rr.astype(np.int64), cc.astype(np.int64), _LUTS[0], _LUTS[1])
+    rr, cc = _kernels.pixel_coords(sk)
+    _kernels.thin_pixels(sk, rr, cc, _LUTS[0], _LUTS[1])
     out[r0:r1, c0:c1] = sk[1:-1, 1:-1].astype(bool)
     return out
 
@@ -109,8 +109,8 @@ def prune_spurs(skel, mask, *, half_widths=config.SPUR_HALF_WIDTHS,
     m = np.zeros(pad.shape, np.uint8)
     m[1:-1, 1:-1] = np.asarray(mask, bool)
     dt = cv2.distanceTransform(m, cv2.DIST_L2, 5)  # float32
-    rr, cc = np.nonzero(pad)
-    _kernels.prune_spurs(pad, rr.astype(np.int64), cc.astype(np.int64), dt,
+    rr, cc = _kernels.pixel_coords(pad)
+    _kernels.prune_spurs(pad, rr, cc, dt,
                          float(half_widths), float(extra_px))
     return pad[1:-1, 1:-1].astype(bool)
 

@@ -231,7 +231,8 @@ def dark_class_levels(image) -> DarkLevels:
 def _flat_core_values(image, interior, step, max_range):
     """Grey of the ``interior`` pixels (of the image subsampled by ``step``) that have a flat
     3 x 3 neighbourhood in the full image: grey range at most ``max_range``."""
-    rr, cc = np.nonzero(interior)
+    from . import _kernels
+    rr, cc = _kernels.pixel_coords(interior)
     rr, cc = rr * step, cc * step
     h, w = image.shape
     ok = (rr > 0) & (cc > 0) & (rr < h - 1) & (cc < w - 1)
@@ -290,31 +291,21 @@ def _local_background(img, exclude, *, band, n_rings=4, max_rings=64):
     """Grey level the image would have without the excluded (dark) pixels.
 
     Known pixels keep their own value. Excluded pixels are filled ring by ring from their known
-    3 x 3 neighbours (:func:`semkit._kernels.fill_background`): of those neighbours, the ones
+    3 x 3 neighbours (:func:`semkit._kernels.fill_excluded`): of those neighbours, the ones
     within ``band`` of the darkest are averaged, so next to a phase boundary the rim of a
     crack, or the boundary line itself, takes the grey of one phase — a plain box mean would
     mix a dark and a bright mineral and make the dark one look like crack. The first
     ``n_rings`` rings decide the rim; filling goes on (up to ``max_rings``) into the core of wide
     cracks, where the decision does not depend on it; anything left takes the median.
     """
-    import cv2
-
     from . import _kernels
-    ex = np.ascontiguousarray(exclude, bool)
-    known = np.pad((~ex).view(np.uint8), 1, mode="constant", constant_values=0)
-    out = np.pad(np.ascontiguousarray(img, np.float32), 1, mode="constant", constant_values=0.0)
-    rr, cc = np.nonzero(ex)
-    # the ring that fills each excluded pixel: its chessboard distance to the known pixels
-    ring = cv2.distanceTransform(ex.view(np.uint8), cv2.DIST_C, 3)[rr, cc]
-    left = _kernels.fill_background(out, known, (rr + 1).astype(np.int64),
-                                    (cc + 1).astype(np.int64),
-                                    np.minimum(ring, max_rings + 1).astype(np.int64),
-                                    int(max_rings), float(band), out)
-    val = out[1:-1, 1:-1]
+    val, known, left = _kernels.fill_excluded(np.ascontiguousarray(img, np.float32),
+                                              np.ascontiguousarray(exclude, bool),
+                                              int(max_rings), float(band))
     if left:
-        rest = known[1:-1, 1:-1] == 0
+        rest = known == 0
         val[rest] = float(np.median(img[~exclude])) if (~exclude).any() else float(img.max())
-    return np.ascontiguousarray(val)
+    return val
 
 
 def noise_sigma(image) -> float:
@@ -411,7 +402,7 @@ def threshold_auto(image, *, area_fraction=config.AUTO_AREA_FRACTION,
     keep = np.zeros(n, bool)
     keep[lab[seed]] = True
     keep[0] = False
-    detect = keep[lab]
+    detect = _kernels.lookup(keep, lab)
     area &= detect
     frac = float(area.mean())
     value = 0.5 * (lv.mineral + lv.crack)

@@ -108,7 +108,8 @@ def crack_groups(crack_labels, *, link_px=LINK_PX, small_px=SMALL_OBJECT_PX, are
     # each small object looks for large ones in its own box, grown by the link distance and a
     # margin: a large pixel outside lies more than link_px away in the chessboard metric, so
     # further in the chamfer one, and every distance up to link_px reads as on the whole image
-    rr, cc = np.nonzero(kind_img == 2)
+    from .._kernels import pixel_coords
+    rr, cc = pixel_coords(kind_img == 2)
     ids = lab[rr, cc]
     order = np.argsort(ids, kind="stable")          # each object's pixels in raster order
     ids, rr, cc = ids[order], rr[order], cc[order]
@@ -180,7 +181,7 @@ def crack_morphology(crack_labels, *, image=None, skeleton=None, background=None
     """
     import cv2
 
-    from .._kernels import skeleton_window_sums
+    from .._kernels import pixel_coords, skeleton_window_sums
     from ..skeleton import skeletonize
     lab = np.asarray(crack_labels)
     n = int(lab.max()) if area is None else len(area) - 1
@@ -192,7 +193,7 @@ def crack_morphology(crack_labels, *, image=None, skeleton=None, background=None
     mask = lab > 0
     skel = skeletonize(mask) if skeleton is None else (np.asarray(skeleton, bool) & mask)
     group_of = crack_groups(lab, link_px=link_px, area=area)
-    rr, cc = np.nonzero(skel)
+    rr, cc = pixel_coords(skel)
     g = group_of[lab[rr, cc]]
     mask8 = mask.view(np.uint8)
     at = np.flatnonzero(mask)        # the mask pixels, raster order
