@@ -79,7 +79,9 @@ def microct_scores(folder, **options):
         s.update(image=f.name, reported_length_ratio=row["crack_length_um"] / s["length_truth_px"],
                  reported_area_ratio=row["crack_area_um2"] / s["area_truth_px"],
                  outside_region_px=int((pred & ~a.full_size(a.region.mask)).sum()),
-                 valid=bool(row["valid"]), roi=row["roi"], n_rejected=row["n_rejected"])
+                 valid=bool(row["valid"]), valid_note=row["valid_note"],
+                 contrast_to_noise=row["contrast_to_noise"], roi=row["roi"],
+                 n_rejected=row["n_rejected"])
         rows.append(s)
     return pd.DataFrame(rows)
 

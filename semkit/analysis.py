@@ -25,7 +25,8 @@ IMAGE_COLUMNS = ["image", "pixel_size_um", "pixel_size_source", "threshold_metho
                  "area_T_um2", "area_S_um2", "P", "seconds"]
 #: images.csv columns after :data:`IMAGE_COLUMNS`.
 EXTRA_IMAGE_COLUMNS = ["valid", "valid_note", "image_area_um2", "crack_area_fraction",
-                       "crack_density_per_mm", "threshold_ok", "threshold_note", "roi",
+                       "crack_density_per_mm", "threshold_ok", "threshold_note",
+                       "contrast_to_noise", "roi",
                        "roi_fraction", "roi_ok", "data_bar_rows", "pixel_size_note", "n_thin",
                        "n_rejected", "n_pores", "pore_area_um2", "width_px", "height_px", "flatten",
                        "despeckle", "error"]
@@ -491,10 +492,10 @@ class CrackAnalysis:
         seg = self.options.segmenter
         if seg is not None:
             return dict(threshold_method="segmenter", threshold_value=float(seg.threshold),
-                        threshold_ok=True, threshold_note="")
+                        threshold_ok=True, threshold_note="", contrast_to_noise=float("nan"))
         t = self.thresholded
         return dict(threshold_method=t.method, threshold_value=t.value, threshold_ok=bool(t.ok),
-                    threshold_note=t.note)
+                    threshold_note=t.note, contrast_to_noise=t.contrast_to_noise)
 
     def _validity(self, row):
         """``valid`` and ``valid_note``: False with the reasons when a number of the row is
@@ -506,6 +507,11 @@ class CrackAnalysis:
             notes.append(f"roi: {self.region.note}")
         if row["pixel_size_note"]:
             notes.append(f"pixel size: {row['pixel_size_note']}")
+        cnr = row["contrast_to_noise"]
+        if cnr < config.MIN_CONTRAST_TO_NOISE and row["n_cracks"] > 0:
+            notes.append(f"noise: the crack contrast is {cnr:.1f} sigmas of the fine-scale "
+                         f"noise (under {config.MIN_CONTRAST_TO_NOISE:g}, noise specks pass for "
+                         "cracks and faint cracks are lost)")
         faint = self._faint_length_share()
         if faint >= config.FAINT_MAX_LENGTH_SHARE:
             notes.append(f"faint lines: {faint:.0%} of the crack length lies less than "

@@ -77,6 +77,14 @@ class ThresholdResult:
     note: str = ""
     background: np.ndarray | None = None   #: local background grey (``auto`` only)
     crack_level: float = float("nan")      #: crack core grey (``auto`` only)
+    noise: float = float("nan")            #: fine-scale noise sigma (``auto`` only)
+    contrast: float = float("nan")         #: darkest mineral minus crack grey (``auto`` only)
+
+    @property
+    def contrast_to_noise(self) -> float:
+        """Crack contrast over the fine-scale noise (:func:`field_noise_sigma`); NaN
+        unless ``auto`` found a crack grey."""
+        return float(self.contrast / self.noise) if self.noise > 0 else float("nan")
 
 
 def parse_method(method: str):
@@ -323,6 +331,23 @@ def noise_sigma(image) -> float:
     return float(1.4826 * mad / 0.943) + 1e-6
 
 
+def field_noise_sigma(image) -> float:
+    """Robust std of the image's fine-scale fluctuation: the noise as a detector sees it on a
+    smoothed image (where it is correlated over a few pixels, so the pixel-to-pixel
+    :func:`noise_sigma` reads it low). MAD of the image minus its 5 x 5 mean, on a central
+    crop; edges and cracks are a minority and do not enter."""
+    import cv2
+    a = np.asarray(image, np.float32)
+    h, w = a.shape
+    if h * w > 512 * 512:
+        r0, c0 = max((h - 512) // 2, 0), max((w - 512) // 2, 0)
+        a = np.ascontiguousarray(a[r0:r0 + 512, c0:c0 + 512])
+    hp = a - cv2.blur(a, (5, 5), borderType=cv2.BORDER_REFLECT)
+    v = hp[2:-2:2, 2:-2:2].ravel()
+    mad = np.median(np.abs(v - np.median(v, overwrite_input=True)), overwrite_input=True)
+    return float(1.4826 * mad) + 1e-6
+
+
 def _operand(x):
     """A scalar as NumPy uses it against a float32 array: a Python number is cast to float32
     (NEP 50), a NumPy scalar keeps its type."""
@@ -394,9 +419,12 @@ def threshold_auto(image, *, area_fraction=config.AUTO_AREA_FRACTION,
     seed = np.zeros(img.shape, bool)
     detect = np.zeros(img.shape, bool)
     area.ravel()[idx] = depth > area_fraction * contrast
-    seed.ravel()[idx] = depth > np.maximum(seed_fraction * contrast, config.AUTO_SEED_SIGMAS * sn)
+    # the depth tests count noise as the smoothed image carries it: correlated over a few
+    # pixels, so a speck-sized dip is ~1.3-1.6 x deeper than the pixel-to-pixel sigma says
+    sd = max(field_noise_sigma(img), sn)
+    seed.ravel()[idx] = depth > np.maximum(seed_fraction * contrast, config.AUTO_SEED_NOISE * sd)
     detect.ravel()[idx] = depth > np.maximum(detect_fraction * contrast,
-                                             config.AUTO_DETECT_SIGMAS * sn)
+                                             config.AUTO_DETECT_NOISE * sd)
     # hysteresis: keep weak components that hold a seed pixel
     n, lab = cv2.connectedComponents(detect.view(np.uint8), connectivity=8)
     keep = np.zeros(n, bool)
@@ -420,7 +448,7 @@ def threshold_auto(image, *, area_fraction=config.AUTO_AREA_FRACTION,
             "mineral, and thin-crack areas scale with the contrast to it")) if t)
     note = "; ".join(t for t in (note0, note) if t)
     return ThresholdResult(area, detect, "auto", value, frac, ok, note, background=bg,
-                           crack_level=lv.crack)
+                           crack_level=lv.crack, noise=sd, contrast=lv.mineral - lv.crack)
 
 
 def coverage(image, background, crack_level):

@@ -67,3 +67,52 @@ def test_crack_candidates_equal_numpy_expression_for_both_scalar_kinds():
         _kernels.crack_candidates(img, closed, _operand(dark), _operand(kmin), _operand(frac),
                                   _operand(crack), got)
         assert np.array_equal(got, want)
+
+
+def test_pixel_coords_and_lookup_equal_numpy():
+    rng = np.random.default_rng(3)
+    for dtype in (bool, np.uint8):
+        m = (rng.random((37, 53)) < 0.2).astype(dtype)
+        rr, cc = _kernels.pixel_coords(m)
+        r0, c0 = np.nonzero(m)
+        assert np.array_equal(rr, r0) and np.array_equal(cc, c0) and rr.dtype == np.int64
+    lab = rng.integers(0, 40, (37, 53)).astype(np.int32)
+    for table in (rng.random(40) < 0.5, rng.integers(-5, 5, 40).astype(np.int8)):
+        assert np.array_equal(_kernels.lookup(table, lab), table[lab])
+
+
+def _fill_reference(img, exclude, n_rings, band):
+    """The ring fill written plainly: rings from OpenCV's chessboard distance transform, each
+    ring decided from the pixels known before it, then applied."""
+    import cv2
+    out = img.astype(np.float32).copy()
+    known = ~exclude
+    ring = cv2.distanceTransform(exclude.astype(np.uint8), cv2.DIST_C, 3).astype(int)
+    h, w = img.shape
+    for r in range(1, n_rings + 1):
+        new = {}
+        for i, j in zip(*np.nonzero(exclude & (ring == r))):
+            vals = [out[a, b] for a in range(i - 1, i + 2) for b in range(j - 1, j + 2)
+                    if 0 <= a < h and 0 <= b < w and known[a, b]]
+            m = min(vals)
+            near = [v for v in vals if v <= m + band]
+            new[i, j] = np.float32(sum(float(v) for v in near) / len(near))
+        for (i, j), v in new.items():
+            out[i, j], known[i, j] = v, True
+    return out, known
+
+
+def test_fill_excluded_equals_the_plain_ring_fill():
+    rng = np.random.default_rng(11)
+    img = rng.uniform(40, 200, (30, 41)).astype(np.float32)
+    exclude = np.zeros(img.shape, bool)
+    exclude[5:17, 3:30] = True          # a wide block: rings 1-6
+    exclude[0:3, 35:41] = True          # at the image corner
+    exclude[20:29, 10:12] = rng.random((9, 2)) < 0.7
+    for n_rings in (2, 64):
+        val, known, left = _kernels.fill_excluded(img, exclude, n_rings, 12.5)
+        ref, kref = _fill_reference(img, exclude, n_rings, 12.5)
+        assert np.array_equal(known.astype(bool), kref)
+        assert left == int((~kref).sum())
+        assert np.allclose(val[kref], ref[kref], rtol=0, atol=1e-4)
+    assert _kernels.fill_excluded(img, exclude, 2, 12.5)[2] > 0   # the block's core is left

@@ -10,9 +10,11 @@ from semkit.cleanup import denoise
 from semkit.errors import InputError
 from semkit.illumination import flatten_illumination
 from semkit.synth import make_sem_image
+from semkit import config
 from semkit.threshold import (
     crack_mask,
     dark_class_levels,
+    field_noise_sigma,
     noise_sigma,
     parse_method,
     threshold_local,
@@ -24,6 +26,11 @@ _spec = importlib.util.spec_from_file_location(
     "line_family", pathlib.Path(__file__).resolve().parents[2] / "benchmarks" / "line_family.py")
 lines = importlib.util.module_from_spec(_spec)
 _spec.loader.exec_module(lines)
+_spec = importlib.util.spec_from_file_location(
+    "semkit_dev_family",
+    pathlib.Path(__file__).resolve().parents[2] / "benchmarks" / "semkit_dev_family.py")
+dev = importlib.util.module_from_spec(_spec)
+_spec.loader.exec_module(dev)
 
 
 def test_parse_method():
@@ -207,3 +214,36 @@ def test_a_crack_grey_pulled_up_by_partly_resolved_cracks_is_flagged():
     img, true_area, _ = lines.line_mix(0.6)
     row = analyse_image(img, pixel_size_um=1.0, stage="failure", classify=False).summary()
     assert row["valid"] and abs(row["crack_area_um2"] / true_area - 1) < 0.05
+
+
+def test_field_noise_sigma_reads_smoothed_noise_as_deep_as_it_is():
+    """Smoothed noise is correlated over a few pixels: the pixel-to-pixel sigma reads it ~1.6 x
+    low, so "6 sigmas" let noise specks seed cracks; the field sigma reads it within 20 %."""
+    rng = np.random.default_rng(2)
+    for sigma in (4.0, 24.0):
+        sm = denoise(rng.normal(120.0, sigma, (600, 700)).astype(np.float32), sigma_px=0.7)
+        assert abs(field_noise_sigma(sm) / sm.std() - 1) < 0.2
+        assert field_noise_sigma(sm) > 1.25 * noise_sigma(sm)
+
+
+def _dev_image(seed, noise):
+    from semkit.analysis import analyse_image
+    ap = dev.appearance(seed)
+    ap["noise_sigma"] = noise
+    s = make_sem_image((768, 1024), stage="post", seed=seed, **ap)
+    row = analyse_image(s.image, pixel_size_um=s.pixel_size_um, name="x", classify=False
+                        ).summary()
+    return row, row["crack_length_um"] / s.pixel_size_um / s.cracks["length_px"].sum() - 1
+
+
+def test_noisy_image_reads_fewer_specks_and_is_flagged():
+    """Development image 1 with its noise raised from 10.6 to 24 grey: counted in pixel
+    sigmas, the seeds let noise specks through (348 objects, length +114 %, valid). In
+    fine-scale noise sigmas: 196 objects, +39 %, and the image is flagged for its noise."""
+    row, err = _dev_image(1, 24.0)
+    assert row["n_cracks"] < 250 and err < 0.6
+    assert row["contrast_to_noise"] < config.MIN_CONTRAST_TO_NOISE
+    assert not row["valid"] and "noise:" in row["valid_note"]
+    row, err = _dev_image(1, 4.0)       # the same scene, quiet: valid, length within 5 %
+    assert row["contrast_to_noise"] >= config.MIN_CONTRAST_TO_NOISE
+    assert row["valid"] and abs(err) < 0.05
