@@ -26,7 +26,7 @@ IMAGE_COLUMNS = ["image", "pixel_size_um", "pixel_size_source", "threshold_metho
 #: images.csv columns after :data:`IMAGE_COLUMNS`.
 EXTRA_IMAGE_COLUMNS = ["valid", "valid_note", "image_area_um2", "crack_area_fraction",
                        "crack_density_per_mm", "threshold_ok", "threshold_note",
-                       "contrast_to_noise", "roi",
+                       "contrast_to_noise", "scan_line_sigma", "roi",
                        "roi_fraction", "roi_ok", "data_bar_rows", "pixel_size_note", "n_thin",
                        "n_rejected", "n_pores", "pore_area_um2", "width_px", "height_px", "flatten",
                        "despeckle", "error"]
@@ -147,9 +147,18 @@ class CrackAnalysis:
         return self._flat_field[1]
 
     @functools.cached_property
+    def _scan_lines(self):
+        """``(image, ScanLines or None)``: ``flat`` with its scan-line offsets removed when it
+        has them (:mod:`semkit.scanlines`)."""
+        if not self.options.scan_lines:
+            return self.flat, None
+        from .scanlines import remove_scan_lines
+        return remove_scan_lines(self.flat)
+
+    @functools.cached_property
     def smooth(self):
         from .cleanup import denoise
-        return denoise(self.flat, sigma_px=self.options.denoise_sigma_px)
+        return denoise(self._scan_lines[0], sigma_px=self.options.denoise_sigma_px)
 
     # stage 3
     @functools.cached_property
@@ -196,7 +205,8 @@ class CrackAnalysis:
         return det & inside, area & inside
 
     #: stages the unlinked first pass shares with this analysis (all before detection)
-    _SHARED = ("region", "_work_image", "_flat_field", "smooth", "thresholded", "ridge")
+    _SHARED = ("region", "_work_image", "_flat_field", "_scan_lines", "smooth", "thresholded",
+               "ridge")
 
     @functools.cached_property
     def unlinked(self):
@@ -481,6 +491,8 @@ class CrackAnalysis:
                    width_px=int(self.image.shape[1]), height_px=int(self.image.shape[0]),
                    flatten=self.options.flatten, despeckle=self.options.despeckle, error="")
         bar = self.data_bar
+        sl = self._scan_lines[1]
+        row["scan_line_sigma"] = sl.sigma if sl is not None and sl.removed else float("nan")
         row.update(roi=reg.kind, roi_fraction=reg.fraction, roi_ok=reg.ok,
                    data_bar_rows=f"{bar.row0}-{bar.row1}" if bar else "",
                    pixel_size_note=self.pixel_size_note)

@@ -46,6 +46,16 @@ AUTO_SEED_NOISE = 6.0
 #: fine-scale noise sigmas is not valid: noise specks pass for cracks and faint cracks are lost
 #: (development images below 12: errors up to 28 % on their own and 39 % with added noise)
 MIN_CONTRAST_TO_NOISE = 12.0
+
+# --- scan-line noise (semkit.scanlines) ---
+#: rows are compared with their vertical Gaussian smoothing of this sigma (rows)
+SCAN_LINE_SIGMA_ROWS = 3.0
+#: row offsets are removed when their robust std is at least this many times what pixel noise
+#: gives (development, sample, micro-CT, granite, Obara and shale images: 0-2.4; row noise of
+#: 1 grey on a 3-grey pixel noise: 3.8)
+SCAN_LINE_MIN_RATIO = 3.0
+#: rows further out than this many robust sigmas (a crack along the row) keep their grey
+SCAN_LINE_OUTLIER = 4.0
 #: when no crack is wide enough to show its core grey, the core is taken as this share of the
 #: darkest mineral's grey at most (BSE: epoxy/void is near black).
 THIN_ONLY_CRACK_RATIO = 0.3
@@ -313,6 +323,10 @@ REJECT_RIM_HOLE_LIFT = 0.3
 #: ... and its holes hold at least this share of its own area (a ring around an inclusion of
 #: radius >= half the ring's width holds >= 1/8; a network with one small loop far less)
 REJECT_RIM_HOLE_SHARE = 0.1
+#: ... and at least this share of its pixels hugs its holes (within its width + 1.5 px): a
+#: crack network of 4300 px that closed a loop around a bright grain through one pixel (1000
+#: of its pixels around the grain: 0.27) was rejected whole as the grain's rim
+REJECT_RIM_MIN_SHARE = 0.6
 #: ... and at least this wide (a blurred thin crack is shallow; its depth says little)
 REJECT_RIM_MIN_WIDTH_PX = 2.5
 #: objects smaller than this (px) are not judged: too few pixels for their statistics

@@ -60,6 +60,9 @@ class AnalysisOptions:
     roi : str
         Sample region: ``auto`` (data bar cropped, black / white surround removed), ``none``
         (whole image) or the path of a mask image (non-zero = sample); see :mod:`semkit.roi`.
+    scan_lines : bool
+        Find row-to-row grey offsets of a raster scan and remove them when they stand above
+        pixel noise (:mod:`semkit.scanlines`); an image without them is left as it is.
     bright_cracks : bool
         Cracks are brighter than the rock (fluorescent-dye impregnated thin sections under
         UV / blue light; some CT): the grey image is inverted before everything else
@@ -81,6 +84,7 @@ class AnalysisOptions:
     minerals: str | None = None
     roi: str = "auto"
     ridge: bool = True
+    scan_lines: bool = True
     link: bool = False
     reject: bool = True
     segmenter: object = None

@@ -14,6 +14,9 @@ Every cleaned object gets a few measures (:func:`object_evidence`):
   closes r^2 / (2 r w + w^2) of its own area (1/3 at r = w, 1/8 at r = w / 2): an object
   whose holes hold less than ``REJECT_RIM_HOLE_SHARE`` of its area is a network with a small
   loop somewhere, not a rim.
+* ``rim_share`` — share of the object's pixels within its own width (+1.5 px) of the holes it
+  closes: ~1 for a ring, low for a crack network that closes one loop around a grain and runs
+  on elsewhere (less than ``REJECT_RIM_MIN_SHARE``: not a rim, however bright the grain).
 * ``elongation`` — sqrt of the ratio of the principal second moments (1 for a disc).
 * ``width_px`` — mean width, area over skeleton length; ``slenderness`` — skeleton length
   over mean width (a curved crack is slender even when its moments are not elongated).
@@ -54,6 +57,7 @@ RULES = (
     ("grain_rim", lambda e: (e.encloses_px >= config.REJECT_RIM_LOOP_PX)
      & (e.encloses_px >= config.REJECT_RIM_HOLE_SHARE * e.area_px)
      & (e.hole_lift >= config.REJECT_RIM_HOLE_LIFT)
+     & (e.rim_share >= config.REJECT_RIM_MIN_SHARE)
      & (e.side_depth < config.REJECT_ZONE_MAX_DEPTH)),
     ("compact_dark", lambda e: (e.slenderness < config.REJECT_COMPACT_SLENDERNESS)
      & (e.width_px >= config.REJECT_COMPACT_WIDTH_PX)
@@ -155,8 +159,8 @@ def object_evidence(labels, n, grey, *, crack_level, noise, skeleton=None, regio
     Returns
     -------
     evidence : pandas.DataFrame
-        Index 1..n: ``area_px, side_depth, encloses_px, hole_lift, elongation, width_px,
-        slenderness, background_rel, density, neighbours, texture``.
+        Index 1..n: ``area_px, side_depth, encloses_px, hole_lift, rim_share, elongation,
+        width_px, slenderness, background_rel, density, neighbours, texture``.
     """
     import cv2
 
@@ -201,6 +205,7 @@ def object_evidence(labels, n, grey, *, crack_level, noise, skeleton=None, regio
     holes = back[1:-1, 1:-1] == 1
     encloses = np.zeros(n + 1)
     hole_grey = np.full(n + 1, np.nan)
+    rim_share = np.zeros(n + 1)
     if holes.any():
         nh, hl = cv2.connectedComponents(holes.view(np.uint8), connectivity=4)
         at = np.flatnonzero(holes)
@@ -212,6 +217,11 @@ def object_evidence(labels, n, grey, *, crack_level, noise, skeleton=None, regio
         encloses = np.bincount(owner[1:], weights=np.bincount(hole_of, minlength=nh)[1:],
                                minlength=n + 1)[:n + 1]
         hole_grey = _label_percentiles(g.ravel()[at], owner[hole_of], n, (50.0,), std=False)[0][0]
+        # share of the object that hugs a hole: within its own width (+1.5 px) of one
+        d = cv2.distanceTransform((~holes).view(np.uint8), cv2.DIST_L2, 3)
+        hug = d[on] <= width[lab_on] + 1.5
+        rim_share = np.bincount(lab_on, weights=hug, minlength=n + 1)[:n + 1] / np.maximum(
+            area, 1.0)
     hole_lift = (hole_grey - ring_lo) / np.maximum(ring_lo - float(crack_level), 1e-3)
     # other objects (>= 5 px) whose centre lies in the window around this one's centre
     big = np.flatnonzero(area[1:] >= 5) + 1
@@ -222,7 +232,7 @@ def object_evidence(labels, n, grey, *, crack_level, noise, skeleton=None, regio
                                 config.ZONE_NEIGHBOUR_WINDOW_PX) - (area >= 5)
     texture = ring_sd / max(float(noise), 1e-6)
     ev = pd.DataFrame(dict(area_px=area, side_depth=side_depth, encloses_px=encloses,
-                           hole_lift=hole_lift,
+                           hole_lift=hole_lift, rim_share=rim_share,
                            elongation=elong, width_px=width,
                            slenderness=sk / np.maximum(width, 1e-9),
                            background_rel=background_rel, density=density,

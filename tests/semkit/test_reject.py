@@ -6,23 +6,29 @@ from semkit.reject import RULES, reject_objects
 
 def _row(**kw):
     base = dict(area_px=400.0, side_depth=0.9, encloses_px=0.0, hole_lift=float("nan"),
-                elongation=10.0, width_px=3.0, slenderness=40.0, background_rel=1.0,
+                rim_share=0.0, elongation=10.0, width_px=3.0, slenderness=40.0, background_rel=1.0,
                 density=0.05, neighbours=0.0, texture=1.0)
     return {**base, **kw}
 
 
 def test_grain_rim_is_a_ring_not_a_network_with_a_small_loop():
-    """A halo is a ring whose hole holds about its own area (micro-CT tuning slices: 0.8-1.0);
-    a crack network that closes one small loop (a development image: 140 px of 7 267) is kept
-    as a crack, however bright the loop's inside."""
+    """A halo is a ring whose hole holds about its own area and that hugs it whole (micro-CT
+    tuning slices: 0.8-1.0 and 0.97-1.0); a crack network that closes one small loop (a
+    development image: 140 px of 7 267), or one loop around a large bright grain and runs on
+    elsewhere (development image 3: 3 293 px closed by 11 249, of which 0.20 hug the grain), is
+    kept as a crack, however bright the loop's inside."""
     ev = pd.DataFrame([
-        _row(area_px=377, side_depth=0.55, encloses_px=379, hole_lift=0.49, slenderness=40),
-        _row(area_px=150, side_depth=0.39, encloses_px=154, hole_lift=0.66, slenderness=20),
+        _row(area_px=377, side_depth=0.55, encloses_px=379, hole_lift=0.49, slenderness=40,
+             rim_share=0.97),
+        _row(area_px=150, side_depth=0.39, encloses_px=154, hole_lift=0.66, slenderness=20,
+             rim_share=1.0),
         _row(area_px=7267, side_depth=0.77, encloses_px=140, hole_lift=0.81, slenderness=160,
-             width_px=6.75),
-    ], index=[1, 2, 3])
+             width_px=6.75, rim_share=0.05),
+        _row(area_px=11249, side_depth=0.65, encloses_px=3293, hole_lift=0.44, slenderness=140,
+             width_px=5.5, rim_share=0.20),
+    ], index=[1, 2, 3, 4])
     why = reject_objects(ev)
-    assert list(why) == ["grain_rim", "grain_rim", ""]
+    assert list(why) == ["grain_rim", "grain_rim", "", ""]
 
 
 def test_an_open_crack_is_never_rejected_for_its_zone():
@@ -74,3 +80,29 @@ def test_an_image_whose_length_is_mostly_faint_lines_is_flagged():
     assert not row["valid"] and "faint lines" in row["valid_note"]
     thin = case(21, widths=(1.0, 1.0), n_cracks=12)
     assert "faint lines" not in analyse_image(thin.image).summary()["valid_note"]
+
+
+def test_rim_share_tells_a_ring_from_a_network_that_closes_one_loop():
+    """A shallow 3-px ring around a bright disc (a halo) hugs its hole whole and is the disc's
+    rim; the same ring with a long crack running on from it hugs it with half of its pixels
+    and stays a crack."""
+    import cv2
+    import numpy as np
+
+    from semkit.reject import object_evidence
+    grey = np.full((200, 300), 120.0, np.float32)
+    ring = np.zeros(grey.shape, np.uint8)
+    cv2.circle(ring, (60, 100), 20, 1, 3)
+    network = ring.copy()
+    network[99:102, 80:290] = 1
+    inside = np.zeros(grey.shape, np.uint8)
+    cv2.circle(inside, (60, 100), 17, 1, -1)
+    grey[inside > 0] = 200.0
+    # the network: the ring's ~380 px and a 630-px crack: about half of it hugs the disc
+    for mask, lo, hi in ((ring, 0.95, 1.0), (network, 0.4, 0.55)):
+        g = grey.copy()
+        g[mask > 0] = 90.0           # 0.375 of the contrast deep: no open void
+        ev = object_evidence(mask.astype(np.int32), 1, g, crack_level=40.0, noise=1.0)
+        assert ev.encloses_px.iloc[0] > 800
+        assert lo <= ev.rim_share.iloc[0] <= hi, ev.rim_share.iloc[0]
+        assert (reject_objects(ev).iloc[0] == "grain_rim") == (mask is ring)

@@ -4,8 +4,8 @@ import importlib
 
 import pytest
 
-MODULES = ["io", "illumination", "threshold", "ridge", "link", "cleanup", "skeleton", "measure",
-           "analysis", "synth"]
+MODULES = ["io", "illumination", "scanlines", "threshold", "ridge", "link", "cleanup", "skeleton",
+           "measure", "analysis", "synth", "_kernels"]
 
 
 @pytest.mark.parametrize("name", MODULES)

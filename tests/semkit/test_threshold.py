@@ -4,13 +4,13 @@ import pathlib
 
 import numpy as np
 import pytest
-from _synth_cases import case
+from _synth_cases import case, dev_scene
 
+from semkit import config
 from semkit.cleanup import denoise
 from semkit.errors import InputError
 from semkit.illumination import flatten_illumination
 from semkit.synth import make_sem_image
-from semkit import config
 from semkit.threshold import (
     crack_mask,
     dark_class_levels,
@@ -26,11 +26,6 @@ _spec = importlib.util.spec_from_file_location(
     "line_family", pathlib.Path(__file__).resolve().parents[2] / "benchmarks" / "line_family.py")
 lines = importlib.util.module_from_spec(_spec)
 _spec.loader.exec_module(lines)
-_spec = importlib.util.spec_from_file_location(
-    "semkit_dev_family",
-    pathlib.Path(__file__).resolve().parents[2] / "benchmarks" / "semkit_dev_family.py")
-dev = importlib.util.module_from_spec(_spec)
-_spec.loader.exec_module(dev)
 
 
 def test_parse_method():
@@ -228,9 +223,7 @@ def test_field_noise_sigma_reads_smoothed_noise_as_deep_as_it_is():
 
 def _dev_image(seed, noise):
     from semkit.analysis import analyse_image
-    ap = dev.appearance(seed)
-    ap["noise_sigma"] = noise
-    s = make_sem_image((768, 1024), stage="post", seed=seed, **ap)
+    s = dev_scene(seed, noise_sigma=noise)
     row = analyse_image(s.image, pixel_size_um=s.pixel_size_um, name="x", classify=False
                         ).summary()
     return row, row["crack_length_um"] / s.pixel_size_um / s.cracks["length_px"].sum() - 1

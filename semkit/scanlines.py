@@ -1,0 +1,119 @@
+"""Scan-line noise: row-to-row grey offsets of a raster-scanned image, found and removed.
+
+An SEM builds its image line by line; beam-current drift, stage vibration and mains hum shift
+whole lines up or down in grey. The offsets are invisible pixel to pixel but line up along
+each row, so the ridge detector and the threshold read them as horizontal cracks: on
+development images with row offsets of 5 grey (sigma), the crack count went from 56 to 129 and
+the length from +2 % to +14 %, with the image still valid.
+
+Each row's offset is the median, along the row, of the image minus its vertical Gaussian
+smoothing (sigma ``SCAN_LINE_SIGMA_ROWS`` rows), refined once. Pixel noise alone scatters these
+medians by ``1.25 sigma / sqrt(n)`` (n samples per row); images whose offsets scatter more than
+``SCAN_LINE_MIN_RATIO`` times that carry scan-line noise and have it subtracted. Everything else
+is left bit for bit as it was (grain texture and cracks across part of a row do not move a row
+median: development, sample and real images read 1.0-2.4 times the pixel-noise level).
+
+A row whose offset lies more than ``SCAN_LINE_OUTLIER`` robust sigmas from the others (a dark
+crack running along most of a row) keeps its grey: only offsets within the scatter of the
+line noise are removed, so such a crack keeps its depth.
+"""
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from . import config
+
+__all__ = ["ScanLines", "row_offsets", "remove_scan_lines"]
+
+#: every this many columns is sampled for the row medians
+_STEP = 4
+
+
+@dataclasses.dataclass(frozen=True)
+class ScanLines:
+    """What :func:`remove_scan_lines` found.
+
+    Attributes
+    ----------
+    sigma : float
+        Robust std of the row offsets (grey).
+    ratio : float
+        ``sigma`` over what pixel noise alone gives.
+    removed : bool
+        True when the offsets were subtracted (``ratio`` >= ``SCAN_LINE_MIN_RATIO``).
+    """
+
+    sigma: float
+    ratio: float
+    removed: bool
+
+
+def _row_medians(a, sigma_rows):
+    import cv2
+    k = int(2 * np.ceil(3 * sigma_rows) + 1)
+    v = cv2.GaussianBlur(a, (1, k), sigmaX=0, sigmaY=sigma_rows, borderType=cv2.BORDER_REFLECT)
+    return np.median(a - v, axis=1)
+
+
+def row_offsets(image, *, sigma_rows=config.SCAN_LINE_SIGMA_ROWS):
+    """Grey offset of each row against its neighbours (float64, one per row).
+
+    Parameters
+    ----------
+    image : (M, N) ndarray
+    sigma_rows : float
+        Vertical Gaussian (rows) that the rows are compared with.
+
+    Examples
+    --------
+    >>> rng = np.random.default_rng(0)
+    >>> img = np.full((60, 400), 100.0) + rng.normal(0, 2, (60, 400))
+    >>> img[30] += 8
+    >>> off = row_offsets(img)
+    >>> int(np.argmax(off)), bool(7 < off[30] < 9)
+    (30, True)
+    """
+    a = np.ascontiguousarray(np.asarray(image, np.float32)[:, ::_STEP])
+    off = _row_medians(a, sigma_rows).astype(np.float64)
+    # the smoothing holds a share of each row's own offset: measure again on the corrected rows
+    off += _row_medians(np.ascontiguousarray(a - off[:, None].astype(np.float32)), sigma_rows)
+    return off
+
+
+def remove_scan_lines(image, *, min_ratio=config.SCAN_LINE_MIN_RATIO,
+                      outlier=config.SCAN_LINE_OUTLIER):
+    """Subtract the row offsets when they stand above pixel noise.
+
+    Parameters
+    ----------
+    image : (M, N) ndarray
+    min_ratio : float
+        Offsets are removed when their robust std is at least this many times what pixel noise
+        alone gives.
+    outlier : float
+        Rows whose offset lies further than this many robust sigmas out keep their grey.
+
+    Returns
+    -------
+    image : (M, N) ndarray of float32
+        The input (as float32) when nothing is removed.
+    found : ScanLines
+    """
+    from .threshold import noise_sigma
+    a = np.asarray(image, np.float32)
+    h, w = a.shape
+    if h < 16 or w < 16 * _STEP:
+        return a, ScanLines(float("nan"), float("nan"), False)
+    off = row_offsets(a)
+    mid = float(np.median(off))
+    sigma = 1.4826 * float(np.median(np.abs(off - mid))) + 1e-12
+    n = len(range(0, w, _STEP))
+    expected = 1.2533 * noise_sigma(a) / np.sqrt(n)
+    ratio = sigma / max(expected, 1e-12)
+    if ratio < min_ratio:
+        return a, ScanLines(sigma, ratio, False)
+    d = off - mid
+    d[np.abs(d) > outlier * sigma] = 0.0
+    return (a - d[:, None]).astype(np.float32), ScanLines(sigma, ratio, True)
