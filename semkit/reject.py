@@ -15,7 +15,8 @@ Every cleaned object gets a few measures (:func:`object_evidence`):
   whose holes hold less than ``REJECT_RIM_HOLE_SHARE`` of its area is a network with a small
   loop somewhere, not a rim.
 * ``rim_share`` — share of the object's pixels within its own width (+1.5 px) of the holes it
-  closes: ~1 for a ring, low for a crack network that closes one loop around a grain and runs
+  closes (NaN unless it closes a bright loop, ``REJECT_RIM_LOOP_PX`` and
+  ``REJECT_RIM_HOLE_LIFT``): ~1 for a ring, low for a crack network that closes one loop around a grain and runs
   on elsewhere (less than ``REJECT_RIM_MIN_SHARE``: not a rim, however bright the grain).
 * ``elongation`` — sqrt of the ratio of the principal second moments (1 for a disc).
 * ``width_px`` — mean width, area over skeleton length; ``slenderness`` — skeleton length
@@ -205,7 +206,7 @@ def object_evidence(labels, n, grey, *, crack_level, noise, skeleton=None, regio
     holes = back[1:-1, 1:-1] == 1
     encloses = np.zeros(n + 1)
     hole_grey = np.full(n + 1, np.nan)
-    rim_share = np.zeros(n + 1)
+    rim_share = np.full(n + 1, np.nan)
     if holes.any():
         nh, hl = cv2.connectedComponents(holes.view(np.uint8), connectivity=4)
         at = np.flatnonzero(holes)
@@ -217,12 +218,15 @@ def object_evidence(labels, n, grey, *, crack_level, noise, skeleton=None, regio
         encloses = np.bincount(owner[1:], weights=np.bincount(hole_of, minlength=nh)[1:],
                                minlength=n + 1)[:n + 1]
         hole_grey = _label_percentiles(g.ravel()[at], owner[hole_of], n, (50.0,), std=False)[0][0]
-        # share of the object that hugs a hole: within its own width (+1.5 px) of one
+    hole_lift = (hole_grey - ring_lo) / np.maximum(ring_lo - float(crack_level), 1e-3)
+    loop = (encloses >= config.REJECT_RIM_LOOP_PX) & (hole_lift >= config.REJECT_RIM_HOLE_LIFT)
+    if loop.any():
+        # share of the object that hugs a hole: within its own width (+1.5 px) of one (only
+        # for objects closing a bright loop, the ones the grain-rim rule judges)
         d = cv2.distanceTransform((~holes).view(np.uint8), cv2.DIST_L2, 3)
         hug = d[on] <= width[lab_on] + 1.5
-        rim_share = np.bincount(lab_on, weights=hug, minlength=n + 1)[:n + 1] / np.maximum(
-            area, 1.0)
-    hole_lift = (hole_grey - ring_lo) / np.maximum(ring_lo - float(crack_level), 1e-3)
+        rim_share = np.where(loop, np.bincount(lab_on, weights=hug, minlength=n + 1)[:n + 1]
+                             / np.maximum(area, 1.0), np.nan)
     # other objects (>= 5 px) whose centre lies in the window around this one's centre
     big = np.flatnonzero(area[1:] >= 5) + 1
     ri = np.clip(np.rint(cy[big]).astype(int), 0, lab.shape[0] - 1)
