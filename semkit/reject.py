@@ -16,8 +16,9 @@ Every cleaned object gets a few measures (:func:`object_evidence`):
   loop somewhere, not a rim.
 * ``rim_share`` — share of the object's pixels within its own width (+1.5 px) of the holes it
   closes (NaN unless it closes a bright loop, ``REJECT_RIM_LOOP_PX`` and
-  ``REJECT_RIM_HOLE_LIFT``): ~1 for a ring, low for a crack network that closes one loop around a grain and runs
-  on elsewhere (less than ``REJECT_RIM_MIN_SHARE``: not a rim, however bright the grain).
+  ``REJECT_RIM_HOLE_LIFT``): ~1 for a ring, low for a crack network that closes one loop
+  around a grain and runs on elsewhere (less than ``REJECT_RIM_MIN_SHARE``: not a rim, however
+  bright the grain).
 * ``elongation`` — sqrt of the ratio of the principal second moments (1 for a disc).
 * ``width_px`` — mean width, area over skeleton length; ``slenderness`` — skeleton length
   over mean width (a curved crack is slender even when its moments are not elongated).

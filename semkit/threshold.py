@@ -83,8 +83,9 @@ class ThresholdResult:
     @property
     def contrast_to_noise(self) -> float:
         """Crack contrast over the fine-scale noise (:func:`field_noise_sigma`); NaN
-        unless ``auto`` found a crack grey."""
-        return float(self.contrast / self.noise) if self.noise > 0 else float("nan")
+        unless ``auto`` found a crack grey darker than the darkest mineral."""
+        ok = self.noise > 0 and self.contrast > 0
+        return float(self.contrast / self.noise) if ok else float("nan")
 
 
 def parse_method(method: str):
