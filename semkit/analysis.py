@@ -519,6 +519,10 @@ class CrackAnalysis:
             notes.append(f"roi: {self.region.note}")
         if row["pixel_size_note"]:
             notes.append(f"pixel size: {row['pixel_size_note']}")
+        sat = self._saturated_share()
+        if sat >= config.SATURATED_MAX_SHARE:
+            notes.append(f"saturated: {sat:.1%} of the sample is at its brightest grey "
+                         "(clipped): cracks through those grains read narrow or are lost")
         cnr = row["contrast_to_noise"]
         if cnr < config.MIN_CONTRAST_TO_NOISE and row["n_cracks"] > 0:
             notes.append(f"noise: the crack contrast is {cnr:.1f} sigmas of the fine-scale "
@@ -540,6 +544,13 @@ class CrackAnalysis:
             notes.append(f"rejection: {share:.0%} of the dark area was rejected by the zone and "
                          f"shape rules ({rules}); the figures depend on them: check the overlay")
         return dict(valid=not notes, valid_note="; ".join(notes))
+
+    def _saturated_share(self):
+        """Share of the sample region (every other pixel) at the image's brightest grey: a
+        plateau there is clipping (detector saturation), not a mineral."""
+        r = self.region.mask[::2, ::2]
+        v = self.image[::2, ::2][r]
+        return float(np.count_nonzero(v == v.max())) / v.size if v.size else 0.0
 
     def _faint_length_share(self):
         """Share of the crack length in objects whose core lies less than

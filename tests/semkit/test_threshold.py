@@ -240,3 +240,16 @@ def test_noisy_image_reads_fewer_specks_and_is_flagged():
     row, err = _dev_image(1, 4.0)       # the same scene, quiet: valid, length within 5 %
     assert row["contrast_to_noise"] >= config.MIN_CONTRAST_TO_NOISE
     assert row["valid"] and abs(err) < 0.05
+
+
+def test_a_clipped_image_is_flagged_saturated():
+    """Development image 11 with its grey raised 1.4x and clipped at 255 (its brightest mineral
+    saturates): area -17 %, length -11 %, valid before; now flagged. Unclipped: valid."""
+    from semkit.analysis import analyse_image
+    s = dev_scene(11)
+    clipped = np.minimum(s.image.astype(np.float64) * 1.4, 255).astype(np.uint8)
+    for img, saturated in ((s.image, False), (clipped, True)):
+        row = analyse_image(img, pixel_size_um=s.pixel_size_um, name="x", classify=False
+                            ).summary()
+        assert ("saturated:" in row["valid_note"]) == saturated
+    assert not row["valid"]
