@@ -79,6 +79,8 @@ class CrackAnalysis:
             raise InputError(f"{name or 'image'}: image holds NaN or inf")
         if not pixel_size_um > 0:
             raise InputError(f"pixel_size_um: expected > 0, got {pixel_size_um}")
+        from .io import working_grey
+        img = working_grey(img)
         self.options = options or AnalysisOptions()
         if self.options.bright_cracks:
             from .io import invert_grey

@@ -25,7 +25,7 @@ import pandas as pd
 from . import config
 from .errors import InputError
 
-__all__ = ["LoadedImage", "read_image", "to_grey", "invert_grey", "tiff_pixel_size",
+__all__ = ["LoadedImage", "read_image", "to_grey", "working_grey", "invert_grey", "tiff_pixel_size",
            "magnification_pixel_size", "read_manifest", "resolve_pixel_size", "load_image",
            "write_image", "write_csv_atomic", "list_images", "list_folder"]
 
@@ -88,6 +88,33 @@ def to_grey(image) -> np.ndarray:
     if a.ndim == 3 and a.shape[2] == 1:
         return a[..., 0]
     raise InputError(f"image: expected a 2-D grey or RGB array, got shape {a.shape}")
+
+
+def working_grey(image) -> np.ndarray:
+    """The grey image on the scale semkit's stages work in.
+
+    Unsigned integers stay as they are. An image with negative greys (signed CT numbers,
+    background-subtracted floats) is shifted so that its darkest pixel is 0 (float32): the
+    illumination model is multiplicative, so grey 0 must mean black. A float image whose greys
+    all lie within 0..1 (normalised data, ImageJ 32-bit) is scaled to 0..255: the stages' few
+    absolute floors (contrast 1e-3, histogram bin widths) assume greys of a few units.
+
+    Examples
+    --------
+    >>> working_grey(np.array([[0.0, 0.5], [1.0, 0.2]])).tolist()
+    [[0.0, 127.5], [255.0, 51.0]]
+    >>> working_grey(np.array([[-100, 0], [20, -50]], np.int16)).tolist()
+    [[0.0, 100.0], [120.0, 50.0]]
+    """
+    a = np.asarray(image)
+    if a.dtype.kind == "u" or a.size == 0:
+        return a
+    lo = a.min()
+    if lo < 0:
+        return (a.astype(np.float64) - float(lo)).astype(np.float32)
+    if a.dtype.kind == "f" and a.max() <= 1.0:
+        return a * a.dtype.type(255.0)
+    return a
 
 
 def read_image(path) -> np.ndarray:
