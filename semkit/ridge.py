@@ -23,6 +23,7 @@ from __future__ import annotations
 import numpy as np
 
 from . import config
+from .robust import mad_sigma
 
 __all__ = ["ridge_response", "ridge_mask", "add_ridge_lines"]
 
@@ -88,8 +89,7 @@ def ridge_response(image, *, sigmas=config.RIDGE_SIGMAS_PX, kappa=config.RIDGE_E
             if noise is None:
                 v = (s * s * (dxx[::2, ::2] + dyy[::2, ::2])).ravel()
                 # v is a fresh array: the medians may reorder it in place
-                noise = float(1.4826 * np.median(np.abs(v - np.median(v, overwrite_input=True)),
-                                                 overwrite_input=True))
+                noise = float(mad_sigma(v))
     if out_small is not None:
         np.maximum(out, cv2.resize(out_small, (w, h), interpolation=cv2.INTER_LINEAR), out=out)
     return out, max(noise or 0.0, 1e-6)

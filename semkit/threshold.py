@@ -24,6 +24,7 @@ import numpy as np
 
 from . import config
 from .errors import InputError
+from .robust import median
 
 __all__ = ["ThresholdResult", "DarkLevels", "dark_class_levels", "noise_sigma", "coverage",
            "threshold_otsu",
@@ -328,7 +329,7 @@ def noise_sigma(image) -> float:
         a = np.ascontiguousarray(a[r0:r0 + 512, c0:c0 + 512])
     hp = a - cv2.blur(a, (3, 3), borderType=cv2.BORDER_REFLECT)
     v = hp[1:-1:2, 1:-1:2].ravel()
-    mad = np.median(np.abs(v - np.median(v, overwrite_input=True)), overwrite_input=True)
+    mad = median(np.abs(v - median(v)))
     return float(1.4826 * mad / 0.943) + 1e-6
 
 
@@ -345,7 +346,7 @@ def field_noise_sigma(image) -> float:
         a = np.ascontiguousarray(a[r0:r0 + 512, c0:c0 + 512])
     hp = a - cv2.blur(a, (5, 5), borderType=cv2.BORDER_REFLECT)
     v = hp[2:-2:2, 2:-2:2].ravel()
-    mad = np.median(np.abs(v - np.median(v, overwrite_input=True)), overwrite_input=True)
+    mad = median(np.abs(v - median(v)))
     return float(1.4826 * mad) + 1e-6
 
 

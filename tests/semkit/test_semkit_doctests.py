@@ -5,7 +5,7 @@ import importlib
 import pytest
 
 MODULES = ["io", "illumination", "scanlines", "threshold", "ridge", "link", "cleanup", "skeleton",
-           "measure", "analysis", "synth", "_kernels"]
+           "measure", "analysis", "synth", "_kernels", "robust"]
 
 
 @pytest.mark.parametrize("name", MODULES)
