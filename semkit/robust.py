@@ -15,7 +15,7 @@ def median(values):
 
     Examples
     --------
-    >>> median(np.array([3.0, 1.0, 4.0, 1.5])) == np.median([3.0, 1.0, 4.0, 1.5])
+    >>> bool(median(np.array([3.0, 1.0, 4.0, 1.5])) == np.median([3.0, 1.0, 4.0, 1.5]))
     True
     """
     v = np.asarray(values)
