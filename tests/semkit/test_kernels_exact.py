@@ -116,3 +116,15 @@ def test_fill_excluded_equals_the_plain_ring_fill():
         assert left == int((~kref).sum())
         assert np.allclose(val[kref], ref[kref], rtol=0, atol=1e-4)
     assert _kernels.fill_excluded(img, exclude, 2, 12.5)[2] > 0   # the block's core is left
+
+
+def test_robust_median_is_numpys_to_the_last_bit():
+    from semkit.robust import mad_sigma, median
+    rng = np.random.default_rng(5)
+    for n in (1, 2, 7, 1000, 65537):
+        for dtype in (np.float32, np.float64):
+            v = rng.normal(100.0, 7.0, n).astype(dtype)
+            m = median(v.copy())
+            assert m == np.median(v) and m.dtype == np.median(v).dtype
+            ref = 1.4826 * np.median(np.abs(v - np.median(v)))
+            assert mad_sigma(v.copy()) == ref
