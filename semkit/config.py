@@ -29,17 +29,21 @@ DARK_TAIL_NOISE_SIGMAS = 8.0
 #: crack core grey level. 0.5 is the partial-volume midpoint, which makes area unbiased.
 AUTO_AREA_FRACTION = 0.5
 #: `auto`: thin cracks never reach the midpoint once blurred, so objects are *detected* at a
-#: weaker level (fraction of the contrast, and at least AUTO_DETECT_SIGMAS noise sigmas deep)
+#: weaker level (fraction of the contrast, and at least AUTO_DETECT_NOISE noise sigmas deep)
 #: and kept when they hold a *seed* pixel (hysteresis); area is still counted at the midpoint.
 AUTO_DETECT_FRACTION = 0.27
-AUTO_DETECT_SIGMAS = 4.0
 AUTO_SEED_FRACTION = 0.33
+#: the same depths in pixel-to-pixel noise sigmas (semkit.threshold.noise_sigma), where single
+#: pixels are tested: the local background's candidates, the darkest-pixel crack grey, the
+#: narrow dark lines of the no-dark-tail branch
+AUTO_DETECT_SIGMAS = 4.0
 AUTO_SEED_SIGMAS = 6.0
 #: ... and the detect / seed depths are at least this many sigmas of the fine-scale noise of
 #: the smoothed image (semkit.threshold.field_noise_sigma: what a speck-sized dip of noise
 #: reaches; the pixel-to-pixel sigma reads it 1.3-1.6 x low once the noise is smoothed). On
 #: development images with the noise raised to 24 and 30 grey, the pixel-sigma tests let
-#: noise specks through (length +25 to +123 %, 160-400 objects); these read -36 to +39 %.
+#: noise specks through (length up to +114 and +123 %, 160-410 objects); these read -36 to
+#: +39 % (and the contrast-to-noise flag below marks them).
 AUTO_DETECT_NOISE = 4.0
 AUTO_SEED_NOISE = 6.0
 #: an image whose crack contrast (darkest mineral minus crack grey) is less than this many
