@@ -56,16 +56,13 @@ def _scene(seed, condition):
     """The development scene ``seed`` rendered for ``condition`` (its truth unchanged)."""
     from semkit_dev_family import appearance
 
-    import semkit.synth as synth
+    from semkit.synth import make_sem_image
     ap = appearance(seed)
     if condition.startswith("noise "):
         ap["noise_sigma"] = float(condition.split()[1])
-    grey = float(condition.split()[2]) if condition.startswith("crack grey") else synth.CRACK_GREY
-    old, synth.CRACK_GREY = synth.CRACK_GREY, grey   # the generator's module-level constant
-    try:
-        return synth.make_sem_image((768, 1024), stage="post", seed=seed, **ap)
-    finally:
-        synth.CRACK_GREY = old
+    if condition.startswith("crack grey"):
+        ap["crack_grey"] = float(condition.split()[2])
+    return make_sem_image((768, 1024), stage="post", seed=seed, **ap)
 
 
 def _alter(s, seed, condition):

@@ -60,8 +60,9 @@ SATURATED_MAX_SHARE = 0.01
 #: rows are compared with their vertical Gaussian smoothing of this sigma (rows)
 SCAN_LINE_SIGMA_ROWS = 3.0
 #: row offsets are removed when their robust std is at least this many times what pixel noise
-#: gives (development, sample, micro-CT, granite, Obara and shale images: 0-2.4; row noise of
-#: 1 grey on a 3-grey pixel noise: 3.8)
+#: gives (development family 1.0-1.3, sample images 1.1-1.3, micro-CT 1.3-2.3, shale tiles
+#: 0.9-1.5; the granite 3.6 and Obara micrographs 4.4-6.6 are corrected; row noise of 1 grey
+#: on development image 4, pixel noise 3: 4.2)
 SCAN_LINE_MIN_RATIO = 3.0
 #: rows further out than this many robust sigmas (a crack along the row) keep their grey
 SCAN_LINE_OUTLIER = 4.0

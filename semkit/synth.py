@@ -282,7 +282,7 @@ def make_sem_image(shape=(768, 1024), *, stage="pre", n_cracks=None, widths=(1.0
                    mean_grain_px=None, minerals=MINERALS, gradient=1.0, n_speckles=None,
                    n_pores=0, noise_sigma=5.0, blur_sigma=0.6, boundary_depth=0.12,
                    pixel_size_um=1.43, bit_depth=8, type_mix=None, max_overlap=0.05,
-                   seed=None) -> SynthImage:
+                   crack_grey=CRACK_GREY, seed=None) -> SynthImage:
     """Make a synthetic BSE-like SEM image of cracked rock with exact ground truth.
 
     Parameters
@@ -309,6 +309,9 @@ def make_sem_image(shape=(768, 1024), *, stage="pre", n_cracks=None, widths=(1.0
         Isolated dark specks (1-3 px); default one per 10 000 px.
     n_pores : int
         Round dark pores (radius 3-9 px); they are not cracks.
+    crack_grey : float
+        Grey of the crack void (8-bit scale; jittered by 3 per image): 30, a void or dark
+        epoxy in BSE; lighter for epoxy-filled cracks.
     noise_sigma : float
         Detector noise, grey levels (8-bit scale).
     blur_sigma : float
@@ -523,7 +526,7 @@ def make_sem_image(shape=(768, 1024), *, stage="pre", n_cracks=None, widths=(1.0
     bline = ndi.gaussian_filter(boundary.astype(np.float32), 0.7)
     bline /= max(bline.max(), 1e-9)
     grey = base * (1.0 - boundary_depth * bline) + texture
-    crack_grey = CRACK_GREY + 3.0 * rng.standard_normal()
+    crack_grey = float(crack_grey) + 3.0 * rng.standard_normal()
     grey = grey * (1 - cover) + crack_grey * cover
     grey = grey * (1 - pore_cov) + (crack_grey - 5.0) * pore_cov
     grey = grey * (1 - speck_cov) + (crack_grey + 10.0) * speck_cov

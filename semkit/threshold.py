@@ -318,36 +318,32 @@ def _local_background(img, exclude, *, band, n_rings=4, max_rings=64):
     return val
 
 
-def noise_sigma(image) -> float:
-    """Robust pixel-noise sigma: MAD of the image minus its 3 x 3 mean (/0.943 for white
-    noise), on a subsample; smooth texture and grain contrast do not enter."""
-    import cv2
-    a = np.asarray(image, np.float32)
-    h, w = a.shape
-    if h * w > 512 * 512:  # a central crop is plenty
-        r0, c0 = max((h - 512) // 2, 0), max((w - 512) // 2, 0)
-        a = np.ascontiguousarray(a[r0:r0 + 512, c0:c0 + 512])
-    hp = a - cv2.blur(a, (3, 3), borderType=cv2.BORDER_REFLECT)
-    v = hp[1:-1:2, 1:-1:2].ravel()
-    mad = median(np.abs(v - median(v)))
-    return float(1.4826 * mad / 0.943) + 1e-6
-
-
-def field_noise_sigma(image) -> float:
-    """Robust std of the image's fine-scale fluctuation: the noise as a detector sees it on a
-    smoothed image (where it is correlated over a few pixels, so the pixel-to-pixel
-    :func:`noise_sigma` reads it low). MAD of the image minus its 5 x 5 mean, on a central
-    crop; edges and cracks are a minority and do not enter."""
+def _highpass_mad(image, k):
+    """MAD of the image minus its k x k mean, every other pixel of a central 512 x 512 crop
+    (a crop is plenty; edges and cracks are a minority and do not enter)."""
     import cv2
     a = np.asarray(image, np.float32)
     h, w = a.shape
     if h * w > 512 * 512:
         r0, c0 = max((h - 512) // 2, 0), max((w - 512) // 2, 0)
         a = np.ascontiguousarray(a[r0:r0 + 512, c0:c0 + 512])
-    hp = a - cv2.blur(a, (5, 5), borderType=cv2.BORDER_REFLECT)
-    v = hp[2:-2:2, 2:-2:2].ravel()
-    mad = median(np.abs(v - median(v)))
-    return float(1.4826 * mad) + 1e-6
+    hp = a - cv2.blur(a, (k, k), borderType=cv2.BORDER_REFLECT)
+    e = k // 2
+    v = hp[e:-e:2, e:-e:2].ravel()
+    return median(np.abs(v - median(v)))
+
+
+def noise_sigma(image) -> float:
+    """Robust pixel-noise sigma: MAD of the image minus its 3 x 3 mean (/0.943 for white
+    noise), on a subsample; smooth texture and grain contrast do not enter."""
+    return float(1.4826 * _highpass_mad(image, 3) / 0.943) + 1e-6
+
+
+def field_noise_sigma(image) -> float:
+    """Robust std of the image's fine-scale fluctuation: the noise as a detector sees it on a
+    smoothed image (where it is correlated over a few pixels, so the pixel-to-pixel
+    :func:`noise_sigma` reads it low). MAD of the image minus its 5 x 5 mean."""
+    return float(1.4826 * _highpass_mad(image, 5)) + 1e-6
 
 
 def _operand(x):

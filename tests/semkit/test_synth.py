@@ -96,3 +96,18 @@ def test_bad_arguments():
 def test_sixteen_bit():
     s = make_sem_image((64, 80), n_cracks=1, bit_depth=16, seed=1)
     assert s.image.dtype == np.uint16 and s.image.max() > 255
+
+
+def test_crack_grey_sets_the_void_grey_and_nothing_else():
+    """The cracks (and the pores and specks, voids too) take the grey; the rock keeps its own."""
+    import cv2
+
+    from semkit.synth import make_sem_image
+    a = make_sem_image((192, 256), stage="post", seed=3)
+    b = make_sem_image((192, 256), stage="post", seed=3, crack_grey=80.0)
+    core = a.crack_labels > 0
+    assert np.array_equal(a.crack_labels, b.crack_labels)
+    assert b.image[core].astype(float).mean() > a.image[core].astype(float).mean() + 20
+    rock = cv2.dilate(core.astype(np.uint8), np.ones((9, 9), np.uint8)) == 0
+    diff = np.abs(a.image[rock].astype(float) - b.image[rock].astype(float))
+    assert np.percentile(diff, 99) <= 1
