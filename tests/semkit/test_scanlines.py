@@ -58,3 +58,20 @@ def test_striped_image_reads_as_the_clean_one():
     kept, err_kept = read(scan_lines=False)
     assert abs(err) < 0.08 and row["n_cracks"] < 90 and np.isfinite(row["scan_line_sigma"])
     assert err_kept > 0.15 and kept["n_cracks"] > 120 and np.isnan(kept["scan_line_sigma"])
+
+
+def test_the_cli_flag_reaches_the_analysis(tmp_path):
+    import pandas as pd
+
+    from semkit import cli
+    from semkit.io import write_image
+    img, _ = _striped(_scene().image, 5.0)
+    (tmp_path / "d").mkdir()
+    write_image(tmp_path / "d" / "s.png", img)
+    sigma = {}
+    for flag in ([], ["--no-scan-lines"]):
+        out = tmp_path / ("o" + str(len(flag)))
+        assert cli.main(["analyse", str(tmp_path / "d"), "--out", str(out), "--no-progress",
+                         "--jobs", "1", *flag]) == 0
+        sigma[len(flag)] = pd.read_csv(out / "images.csv").iloc[0]["scan_line_sigma"]
+    assert np.isfinite(sigma[0]) and np.isnan(sigma[1])
