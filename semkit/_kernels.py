@@ -669,6 +669,129 @@ def partial_volume_sums(labels, sel, near, img, bg, crack_level, rim, out):
 
 
 @njit
+def mixed_area_sums(labels, skel, near, area, img, bg, crack_level, resolved, out, n_pv, n_own):
+    """Per-object area: pixel count where the crack core is resolved, partial volume elsewhere.
+
+    Each centreline pixel (``skel``) of an object is *resolved* when a pixel of that object
+    in its 3 x 3 box lies at least ``resolved`` of the way from its background to the crack
+    grey. Every other pixel of the object and of its 1-px rim (``near``) takes the decision of
+    the centreline pixel that reaches it first in a breadth-first search through ``near``
+    (its cross-section), so a resolved cross-section is measured whole by its midpoint count
+    and a thin one whole by partial volume, with no pixel counted both ways. A resolved
+    pixel adds 1 when it is its object's own and in ``area``; an unresolved one adds its
+    coverage ``clip((bg - img) / max(bg - crack_level, 1e-3), 0, 1)``. Object pixels that no
+    centreline reaches count as resolved.
+
+    Parameters
+    ----------
+    labels : (M, N) int32
+    skel : (M, N) uint8
+        Centreline pixels.
+    near : (M, N) uint8
+        The objects and their 1-px rim.
+    area : (M, N) bool
+        Pixels past the midpoint.
+    img, bg : (M, N) float32
+    crack_level, resolved : float32
+    out : (L,) float64
+        Receives the areas (added to); L > every label.
+    n_pv, n_own : (L,) int64
+        Receive the object's own pixels measured by partial volume, and all its own pixels.
+    """
+    h, w = labels.shape
+    eps = np.float32(1e-3)
+    zero = np.float32(0.0)
+    one = np.float32(1.0)
+    owner = np.zeros((h, w), np.int32)
+    state = np.zeros((h, w), np.int8)          # 0 unreached, 1 resolved, 2 unresolved
+    n = 0
+    for i in range(h):
+        for j in range(w):
+            if skel[i, j] and labels[i, j] > 0:
+                n += 1
+    qr = np.empty(max(n, 1), np.int64)
+    qc = np.empty(max(n, 1), np.int64)
+    k = 0
+    for i in range(h):
+        for j in range(w):
+            lab = labels[i, j]
+            if not (skel[i, j] and lab > 0):
+                continue
+            core = False
+            for a in range(max(i - 1, 0), min(i + 2, h)):
+                for b in range(max(j - 1, 0), min(j + 2, w)):
+                    if labels[a, b] == lab:
+                        d = bg[a, b] - crack_level
+                        if not d >= eps:
+                            d = eps
+                        if (bg[a, b] - img[a, b]) / d >= resolved:
+                            core = True
+            owner[i, j] = lab
+            state[i, j] = 1 if core else 2
+            qr[k] = i
+            qc[k] = j
+            k += 1
+    # breadth-first search from the centrelines through the objects and their rims
+    head = 0
+    tail = k
+    cap = k
+    while head < tail:
+        i = qr[head]
+        j = qc[head]
+        head += 1
+        lab = owner[i, j]
+        for a in range(max(i - 1, 0), min(i + 2, h)):
+            for b in range(max(j - 1, 0), min(j + 2, w)):
+                if state[a, b] or not near[a, b]:
+                    continue
+                v = labels[a, b]
+                if v != lab and v != 0:
+                    continue
+                owner[a, b] = lab
+                state[a, b] = state[i, j]
+                if v == lab:  # rim pixels take a decision but pass none on
+                    if tail == cap:
+                        cap = 2 * cap + 16
+                        nr = np.empty(cap, np.int64)
+                        nc = np.empty(cap, np.int64)
+                        nr[:tail] = qr[:tail]
+                        nc[:tail] = qc[:tail]
+                        qr = nr
+                        qc = nc
+                    qr[tail] = a
+                    qc[tail] = b
+                    tail += 1
+    for i in range(h):
+        for j in range(w):
+            v = labels[i, j]
+            st = state[i, j]
+            lab = owner[i, j]
+            if st == 0:
+                if v == 0:
+                    continue
+                lab = v
+                st = 1
+            own = v == lab
+            if own:
+                n_own[lab] += 1
+            if st == 1:
+                if own and area[i, j]:
+                    out[lab] += 1.0
+                continue
+            if own:
+                n_pv[lab] += 1
+            d = bg[i, j] - crack_level
+            if not d >= eps:
+                d = eps
+            c = (bg[i, j] - img[i, j]) / d
+            if c < zero:
+                c = zero
+            elif c > one:
+                c = one
+            out[lab] += c
+
+
+@njit
 def skeleton_window_sums(skel, aperture, mask, ends, dark, rr, cc, half, out):
     """Sums over the (2 half + 1)^2 box around each skeleton pixel, written in place.
 

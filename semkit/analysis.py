@@ -304,24 +304,41 @@ class CrackAnalysis:
 
     @functools.cached_property
     def objects(self):
-        from .measure import crack_table, partial_volume_area
+        from .measure import crack_table, mixed_area, partial_volume_area
         t = crack_table(self.labels, self.n_objects, pixel_size_um=self.pixel_size_um,
                         skeleton=self.skeleton if self.options.length else None,
                         area_mask=self.area_mask, image_name=self.name)
         t["area_method"] = "count"
         th = None if self.options.segmenter is not None else self.thresholded
-        if th is not None and th.background is not None and t["thin"].any():
+        if th is None or th.background is None or not len(t):
+            return t
+        px = self.pixel_size_um
+        if self.options.area == "mixed":
+            # partial volume on every cross-section whose core is not resolved, also inside
+            # wide cracks; the midpoint count on the others
+            area, pv = mixed_area(self.smooth, self.labels, self.n_objects,
+                                  skeleton=self.skeleton, background=th.background,
+                                  crack_level=th.void_level, area_mask=self.area_mask)
+            ids = t["crack_id"].to_numpy()
+            t["area_px"] = area[ids]
+            t["area_um2"] = area[ids] * px * px
+            with np.errstate(divide="ignore", invalid="ignore"):
+                t["mean_aperture_um"] = np.where(t["length_px"] > 0,
+                                                 area[ids] / t["length_px"].to_numpy(),
+                                                 np.nan) * px
+            t["area_method"] = np.where(pv[ids] >= 1.0, "partial_volume",
+                                        np.where(pv[ids] > 0.0, "mixed", "count"))
+        elif t["thin"].any():
             # thin cracks never reach the midpoint: their area is their partial volume
             thin = t["thin"].to_numpy()
             ids = t["crack_id"].to_numpy()[thin]
             pv = partial_volume_area(self.smooth, self.labels, self.n_objects,
-                                     background=th.background, crack_level=th.crack_level,
+                                     background=th.background, crack_level=th.void_level,
                                      ids=ids)
-            px2 = self.pixel_size_um ** 2
             t.loc[thin, "area_px"] = pv[ids]
-            t.loc[thin, "area_um2"] = pv[ids] * px2
+            t.loc[thin, "area_um2"] = pv[ids] * px * px
             t.loc[thin, "mean_aperture_um"] = (pv[ids] / t.loc[thin, "length_px"].to_numpy()
-                                               * self.pixel_size_um)
+                                               * px)
             t.loc[thin, "area_method"] = "partial_volume"
         return t
 

@@ -18,7 +18,7 @@ _ANALYSE_KEYS = ("threshold", "flatten", "denoise_sigma_px", "despeckle", "min_a
                  "max_hole_px", "length", "exclude_pores", "pixel_size_um", "jobs", "progress",
                  "overlays", "classify", "crack_model", "grains", "minerals", "classes",
                  "labels", "roi", "ridge", "link", "reject", "save_masks", "segmenter",
-                 "bright_cracks", "scan_lines")
+                 "bright_cracks", "scan_lines", "area")
 
 
 def _version():
@@ -74,6 +74,9 @@ def _add_analyse(sub):
     p.add_argument("--no-scan-lines", dest="scan_lines", action="store_false", default=None,
                    help="keep row-to-row grey offsets of the raster scan (removed by default "
                         "when they stand above pixel noise)")
+    p.add_argument("--area", choices=("midpoint", "mixed"), default=None,
+                   help="crack area: midpoint pixel count, partial volume for thin cracks "
+                        "(default), or mixed: partial volume on every thin stretch")
     p.add_argument("--link", dest="link", action="store_true", default=None,
                    help="join the pieces of faint, beaded cracks along their lines (about "
                         "doubles the CPU time)")

@@ -78,11 +78,6 @@ THIN_ONLY_CRACK_RATIO = 0.3
 MIN_FLAT_CORE_PX = 10
 FLAT_CORE_SIGMAS = 4.0
 FLAT_CORE_CONTRAST = 0.15
-#: the crack grey (median of all dark cores) brighter than the flat cores' median by more than
-#: this share of the contrast flags the image: cracks of several widths under blur pull the
-#: grey up and the counted areas read high (1.5-8 px lines blurred by 1.4 px: spread 0.24,
-#: area +22 %; development family <= 0.093; micro-CT tuning slices < 0)
-CRACK_GREY_SPREAD_MAX = 0.15
 #: when nothing is darker than the darkest mineral, the crack grey is this low percentile.
 DARKEST_PERCENT = 0.2
 #: no pixel darker than the darkest mineral: narrow dark lines in the rock
@@ -133,6 +128,11 @@ SPUR_HALF_WIDTHS = 2.0
 SPUR_EXTRA_PX = 2.0
 #: a crack whose mean width (area / length) is below this many px is flagged `thin`.
 THIN_WIDTH_PX = 1.6
+#: area (``semkit.measure.mixed_area``): a crack cross-section counts as resolved when its
+#: centreline pixel has a pixel within 1 px at least AREA_RESOLVED_DEPTH of the way from the
+#: background to the void grey; resolved cross-sections are measured by the midpoint pixel
+#: count, the others by the partial-volume coverage of their pixels and a 1-px rim.
+AREA_RESOLVED_DEPTH = 0.8
 
 # --- accuracy targets (issue #2; tests assert these) -----------------------------------------
 AREA_TOL_MEDIAN = 0.03

@@ -63,6 +63,12 @@ class AnalysisOptions:
     scan_lines : bool
         Find row-to-row grey offsets of a raster scan and remove them when they stand above
         pixel noise (:mod:`semkit.scanlines`); an image without them is left as it is.
+    area : str
+        How a crack's area is measured (``auto`` threshold only): ``midpoint`` (default) the
+        pixels past the midpoint between background and void grey, with the partial volume
+        for thin cracks (mean width < ``THIN_WIDTH_PX``); ``mixed`` the midpoint count only
+        on resolved cross-sections and the partial volume on every thin stretch, also inside
+        wide cracks (:func:`semkit.measure.mixed_area`; see docs/semkit.md, *Areas*).
     bright_cracks : bool
         Cracks are brighter than the rock (fluorescent-dye impregnated thin sections under
         UV / blue light; some CT): the grey image is inverted before everything else
@@ -89,6 +95,7 @@ class AnalysisOptions:
     reject: bool = True
     segmenter: object = None
     bright_cracks: bool = False
+    area: str = "midpoint"
 
     def __post_init__(self):
         from .classify import load_model
@@ -104,6 +111,8 @@ class AnalysisOptions:
         if self.flatten not in ("polynomial", "gaussian", "none"):
             raise InputError(f"flatten: expected polynomial, gaussian or none, "
                              f"got {self.flatten!r}")
+        if self.area not in ("midpoint", "mixed"):
+            raise InputError(f"area: expected midpoint or mixed, got {self.area!r}")
         if self.despeckle not in ("specks", "median", "none"):
             raise InputError(f"despeckle: expected specks, median or none, got {self.despeckle!r}")
         if not (self.denoise_sigma_px >= 0):
