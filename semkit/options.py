@@ -68,7 +68,7 @@ class AnalysisOptions:
         pixels past the midpoint between background and void grey, with the partial volume
         for thin cracks (mean width < ``THIN_WIDTH_PX``); ``mixed`` the midpoint count only
         on resolved cross-sections and the partial volume on every thin stretch, also inside
-        wide cracks (:func:`semkit.measure.mixed_area`; see docs/semkit.md, *Areas*).
+        wide cracks (:func:`semkit.measure.mixed_area`; docs/semkit.md, step 5).
     bright_cracks : bool
         Cracks are brighter than the rock (fluorescent-dye impregnated thin sections under
         UV / blue light; some CT): the grey image is inverted before everything else
