@@ -442,7 +442,8 @@ class CrackAnalysis:
                               grain_labels=None if self.grain_map is None else self.grain_map[0],
                               skeleton=self.skeleton,
                               background=None if th is None else th.background,
-                              crack_level=None if th is None else th.crack_level)
+                              crack_level=None if th is None else th.crack_level,
+                              void_level=None if th is None else th.void_level)
 
     def full_size(self, a):
         """``a`` (an array of ``image``'s shape) padded back to the raw image's shape: the

@@ -13,7 +13,7 @@ __all__ = ["classify_stage"]
 
 def classify_stage(cracks, crack_labels, *, grey=None, pixel_size_um=1.0, model=None,
                    post=True, grain_labels=None, skeleton=None, background=None,
-                   crack_level=None):
+                   crack_level=None, void_level=None):
     """Add crack types, confidences, features and partial-volume areas to ``cracks.csv`` rows.
 
     Parameters
@@ -33,7 +33,10 @@ def classify_stage(cracks, crack_labels, *, grey=None, pixel_size_um=1.0, model=
         Grain map: classify inter/intra/trans (``type_pre``).
     skeleton, background, crack_level : optional
         The analysis's skeleton and threshold background / crack-core grey (re-estimated
-        when not given).
+        when not given); the typing features read ``crack_level``.
+    void_level : float, optional
+        Void grey the partial-volume areas are measured against
+        (``ThresholdResult.void_level``); default ``crack_level``.
 
     Returns
     -------
@@ -47,9 +50,10 @@ def classify_stage(cracks, crack_labels, *, grey=None, pixel_size_um=1.0, model=
     lab = np.asarray(crack_labels)
     ids = out["crack_id"].to_numpy() if len(out) else np.zeros(0, int)
     if grey is not None and len(out):
-        ok_level = crack_level is not None and np.isfinite(crack_level)
+        core = void_level if void_level is not None else crack_level
+        ok_level = core is not None and np.isfinite(core)
         a = typed_areas(grey, lab, background=background if ok_level else None,
-                        core=crack_level if ok_level else None).set_index("crack_id")
+                        core=core if ok_level else None).set_index("crack_id")
         out["area_pv_um2"] = a["area_pv_px"].reindex(ids).to_numpy() * pixel_size_um ** 2
     if grain_labels is not None and len(out):
         t, _ = classify_pre(lab, grain_labels)

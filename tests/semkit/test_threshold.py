@@ -212,6 +212,17 @@ def test_areas_are_measured_against_the_void_grey_of_the_flat_cores(blur):
     assert row["valid"] and abs(row["crack_area_um2"] / true_area - 1) < 0.03
 
 
+@pytest.mark.parametrize("blur", [1.0, 1.4])
+def test_typed_areas_use_the_void_grey_too(blur):
+    """A_T and A_S come from the typed partial-volume areas (``area_pv_um2``): against the
+    pulled-up crack grey they read the 1.5-8 px lines +12 % (blur 1) and +28 % (blur 1.4);
+    against the void grey, as the crack areas do, within 5 %."""
+    from semkit.analysis import analyse_image
+    img, true_area, _ = lines.line_mix(blur)
+    c = analyse_image(img, pixel_size_um=1.0, stage="failure", classify=True).typed_cracks
+    assert abs(c.area_pv_um2.sum() / true_area - 1) < 0.05
+
+
 def test_field_noise_sigma_reads_smoothed_noise_as_deep_as_it_is():
     """Smoothed noise is correlated over a few pixels: the pixel-to-pixel sigma reads it ~1.6 x
     low, so "6 sigmas" let noise specks seed cracks; the field sigma reads it within 20 %."""
