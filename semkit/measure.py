@@ -193,7 +193,7 @@ def partial_volume_area(image, labels, n, *, background, crack_level, rim_px=1, 
     background : (M, N) float
         Local background grey (``ThresholdResult.background``).
     crack_level : float
-        Crack core grey.
+        Void (crack core) grey (``ThresholdResult.void_level``).
     ids : sequence of int, optional
         Measure only these objects (others get 0); default all.
 
