@@ -125,11 +125,12 @@ def shear_traces(rng, st, p, th):
     return out, chips
 
 
-def crack_traces(rng, st, kind, start, angle):
+def crack_traces(rng, st, kind, start, angle, path=None):
     """Centreline traces (x, y, width), chips, and the mode (1 tensile, 2 shear) of each
-    trace and chip, of one crack of the given kind."""
+    trace and chip, of one crack of the given kind (``path``: the base-path function, by
+    default :func:`_base_path`)."""
     length = _u(rng, st[{"tensile": "t_length", "shear": "s_length", "mixed": "m_length"}[kind]])
-    p, th = _base_path(rng, start, angle, length)
+    p, th = (path or _base_path)(rng, start, angle, length)
     if kind == "tensile":
         t, c = tensile_traces(rng, st, p, th)
         return t, c, [1] * len(t + c)
@@ -194,6 +195,12 @@ def draw_settings(rng, family):
                 drawn=rng.random() < family["drawn_share"])
 
 
+def _synth_keywords(rng, st):
+    return dict(gradient=st["gradient"], noise_sigma=st["noise"], blur_sigma=st["blur"],
+                mean_grain_px=st["grain_px"], boundary_depth=st["boundary_depth"],
+                n_pores=st["pores"], bit_depth=st["bit_depth"], seed=int(rng.integers(2**31)))
+
+
 def render_scene(shape, family=TRAIN, *, seed=None):
     """One training (or held-out-settings) image and its per-pixel crack types.
 
@@ -210,9 +217,7 @@ def render_scene(shape, family=TRAIN, *, seed=None):
     from semkit.synth import make_sem_image
     rng = np.random.default_rng(seed)
     st = draw_settings(rng, family)
-    kw = dict(gradient=st["gradient"], noise_sigma=st["noise"], blur_sigma=st["blur"],
-              mean_grain_px=st["grain_px"], boundary_depth=st["boundary_depth"],
-              n_pores=st["pores"], bit_depth=st["bit_depth"], seed=int(rng.integers(2**31)))
+    kw = _synth_keywords(rng, st)
     if not st["drawn"]:
         ws = family["synth_widths"][int(rng.integers(len(family["synth_widths"])))]
         s = make_sem_image(shape, stage="post", n_cracks=st["n_cracks"], widths=ws, **kw)
@@ -221,17 +226,78 @@ def render_scene(shape, family=TRAIN, *, seed=None):
         types = code[s.crack_labels]
         return s.image, types, np.where(types <= 2, types, 0).astype(np.int8), st
     s = make_sem_image(shape, stage="pre", n_cracks=0, **kw)
+    image, types, modes, _ = draw_cracks(rng, st, family, s.image, s.illumination)
+    return image, types, modes, st
+
+
+def drawn_scene(shape, family=TRAIN, *, seed=None):
+    """A ``drawn`` scene (whatever the family's ``drawn_share``) with its exact truth.
+
+    Returns
+    -------
+    image : (H, W) ndarray of uint8 or uint16
+    truth : dict
+        As :func:`draw_cracks`, with ``settings``.
+    """
+    from semkit.synth import make_sem_image
+    rng = np.random.default_rng(seed)
+    st = draw_settings(rng, family)
+    s = make_sem_image(shape, stage="pre", n_cracks=0, **_synth_keywords(rng, st))
+    image, _, _, truth = draw_cracks(rng, st, family, s.image, s.illumination)
+    return image, dict(truth, settings=st | dict(drawn=True))
+
+
+def _polylen(t):
+    return float(np.hypot(*np.diff(t[:, :2], axis=0).T).sum()) if len(t) > 1 else 0.0
+
+
+def draw_cracks(rng, st, family, background, illumination):
+    """Draw ``st["n_cracks"]`` cracks of the family's morphologies onto a crack-free image.
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+    st : dict
+        :func:`draw_settings` of the scene.
+    family : dict
+        :data:`TRAIN` or :data:`HELDOUT`.
+    background : (H, W) ndarray of uint8 or uint16
+        Crack-free ``semkit.synth`` image.
+    illumination : (H, W) ndarray
+        Its illumination field (the crack grey follows it).
+
+    Returns
+    -------
+    image : (H, W) ndarray, the dtype of ``background``
+    type_image, mode_image : (H, W) ndarray of int8
+        As :func:`render_scene`.
+    truth : dict
+        ``coverage`` (H, W) float32, the exact crack coverage (chips and debris included);
+        ``trace_length_px``, the length of every drawn trace (each layer, step and link);
+        ``path_length_px``, the length of each crack's path (a layered or stepped shear crack
+        counted once, along its base path).
+    """
+    shape = background.shape
+    paths = []
+
+    def recording_path(*args):
+        p, th = _base_path(*args)
+        paths.append(_polylen(p))
+        return p, th
+
     cov = np.zeros(shape, np.float32)
     types = np.zeros(shape, np.int8)
     modes = np.zeros(shape, np.int8)
     taken = np.zeros(shape, bool)
     placed = tries = 0
+    trace_len = path_len = 0.0
     while placed < st["n_cracks"] and tries < 30 * st["n_cracks"]:
         tries += 1
         kind = TYPES[int(rng.choice(3, p=[0.45, 0.35, 0.2]))]
         start = rng.uniform([20, 20], [shape[1] - 20, shape[0] - 20])
+        paths.clear()
         traces, chips, part = crack_traces(rng, st | family, kind, start,
-                                           rng.uniform(0, 2 * np.pi))
+                                           rng.uniform(0, 2 * np.pi), path=recording_path)
         if not traces:
             continue
         pts = np.vstack(traces)
@@ -258,15 +324,18 @@ def render_scene(shape, family=TRAIN, *, seed=None):
                                      px - x0:px - x0 + cp.shape[1]] >= 0.5)] = code_
         taken[sl] |= ndi.binary_dilation(c > 0, iterations=4)
         placed += 1
-    grey = s.image.astype(np.float64) / (257.0 if st["bit_depth"] == 16 else 1.0)
+        trace_len += sum(_polylen(t) for t in traces)
+        path_len += paths[0] if kind != "tensile" else sum(_polylen(t) for t in traces)
+    grey = background.astype(np.float64) / (257.0 if st["bit_depth"] == 16 else 1.0)
     c = ndi.gaussian_filter(cov, st["blur"])
-    core = st["crack_grey"] * s.illumination + st["noise"] * rng.normal(size=shape)
+    core = st["crack_grey"] * illumination + st["noise"] * rng.normal(size=shape)
     grey = grey * (1 - c) + core * c
     if st["bit_depth"] == 16:
         image = np.clip(np.rint(grey * 257), 0, 65535).astype(np.uint16)
     else:
         image = np.clip(np.rint(grey), 0, 255).astype(np.uint8)
-    return image, types, modes, st
+    return image, types, modes, dict(coverage=cov, trace_length_px=trace_len,
+                                     path_length_px=path_len)
 
 
 def scene_table(seeds, shape=(384, 512), family=TRAIN):
