@@ -236,27 +236,57 @@ def crack_morphology(crack_labels, *, image=None, skeleton=None, background=None
         np.maximum(sm - sa, 0) / np.maximum(sa, 1),
         100 * se / s0,
         sd / np.maximum(sm, 1) if image is not None else np.full(rr.size, np.nan)])
-    m = n + 1
+    end = ends[rr, cc].astype(np.float64)
+    gm = group_of[lab.ravel()[at]]
+    dark_at = dark.ravel()[at] if image is not None else None
+    F = group_features(n + 1, g, ap, end, L, np.bincount(group_of[1:], minlength=n + 1),
+                       gm, dark_at)
+    return group_of, F, dict(rr=rr, cc=cc, group=g, X=L, aperture=ap, end=end, at=at,
+                             dark=dark_at)
+
+
+def group_features(m, g, ap, end, L, n_obj, gm=None, dark=None):
+    """Features (:data:`FEATURE_NAMES`) of groups 0..m-1 from their skeleton pixels' local
+    measures.
+
+    Parameters
+    ----------
+    m : int
+        Number of group ids (rows of the result).
+    g : (k,) ndarray of int
+        Group of each skeleton pixel.
+    ap, end : (k,) ndarray of float
+        Local aperture (px) of each skeleton pixel and 1 where it is a skeleton end.
+    L : (k, len(LOCAL_NAMES)) ndarray
+        Local features of each skeleton pixel.
+    n_obj : (m,) ndarray of int
+        Objects in each group.
+    gm, dark : (j,) ndarray, optional
+        Group and darkness fraction of each mask pixel (the ``fill`` feature; NaN without).
+
+    Returns
+    -------
+    features : (m, len(FEATURE_NAMES)) ndarray of float64
+        NaN rows for groups without skeleton pixels.
+    """
+    F = np.full((m, len(FEATURE_NAMES)), np.nan)
     cnt = np.bincount(g, minlength=m).astype(np.float64)
 
     def gmean(v):
         return np.bincount(g, weights=v, minlength=m) / np.maximum(cnt, 1)
 
     a1, a2 = gmean(ap), gmean(ap * ap)
-    n_obj = np.bincount(group_of[1:], minlength=m).astype(np.float64)
     F[:, 0] = gmean(np.log(ap))
     F[:, 1] = np.sqrt(np.maximum(a2 - a1 ** 2, 0)) / np.maximum(a1, 1e-9)
     for j, k in ((2, 1), (3, 2), (4, 3), (7, 4)):
         F[:, j] = gmean(L[:, k])
-    F[:, 5] = 100 * np.bincount(g, weights=ends[rr, cc].astype(float), minlength=m) / \
-        np.maximum(cnt, 1)
-    F[:, 6] = np.log1p(100 * n_obj / np.maximum(cnt, 1))
+    F[:, 5] = 100 * np.bincount(g, weights=end, minlength=m) / np.maximum(cnt, 1)
+    F[:, 6] = np.log1p(100 * np.asarray(n_obj, np.float64) / np.maximum(cnt, 1))
     F[:, 9] = gmean((ap <= THIN_PX).astype(float))
     F[:, 10] = gmean((ap >= WIDE_PX).astype(float))
     F[:, 11] = np.log(np.maximum(cnt, 1))
-    if image is not None:
-        gm = group_of[lab.ravel()[at]]
-        F[:, 8] = np.bincount(gm, weights=dark.ravel()[at], minlength=m) / np.maximum(
+    if dark is not None:
+        F[:, 8] = np.bincount(gm, weights=dark, minlength=m) / np.maximum(
             np.bincount(gm, minlength=m), 1)
     F[cnt == 0] = np.nan
-    return group_of, F, dict(rr=rr, cc=cc, group=g, X=L)
+    return F

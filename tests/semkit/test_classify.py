@@ -173,6 +173,37 @@ def test_classify_post_synthetic_accuracy_and_p():
     assert covered >= 4, covered
 
 
+def test_a_network_longer_than_any_trained_crack_is_typed_in_pieces():
+    """A 1190-px straight opening (log length 7.1 against the trained 6.6) read as out of
+    range and untrusted when typed whole; typed in pieces (``PIECE_PX``) it is a trusted
+    tensile."""
+    lab = np.zeros((40, 1200), np.int32)
+    lab[18:24, 5:1195] = 1
+    t, types = classify_post(lab)
+    assert t.loc[0, "type_post"] == "tensile" and bool(t.loc[0, "type_post_ok"]), t.iloc[0]
+    assert t.loc[0, "frac_tensile"] == pytest.approx(1.0)
+    assert (types[lab > 0] == POST["tensile"]).all()
+
+
+def test_p_of_a_dense_image_typed_in_pieces():
+    """A 1024 x 768 semkit.synth post-test image with 30 cracks joined into networks (the
+    speed benchmark's image 3): typed whole, its P read 60 against the true 3.5 (flagged);
+    typed in pieces it reads within 25 %, and the truth lies in its P band."""
+    from semkit.analysis import analyse_image
+    from semkit.synth import make_sem_image
+    s = make_sem_image((768, 1024), stage="post", widths=(2.0, 8.0), gradient=2.5,
+                       n_cracks=30, seed=1003)
+    code = {"tensile": 1, "shear": 2}
+    kind = np.zeros(s.crack_labels.max() + 1, np.int8)
+    for cid, t in zip(s.cracks.crack_id, s.cracks.type_post):
+        kind[cid] = code.get(t, 0)
+    tp = kind[s.crack_labels]
+    p_true = (tp == 1).sum() / (tp == 2).sum()
+    row = analyse_image(s.image, pixel_size_um=s.pixel_size_um, stage="failure").summary()
+    assert abs(row["P"] / p_true - 1) < 0.25, (row["P"], p_true)
+    assert row["P_low"] <= p_true <= row["P_high"], (row["P_low"], p_true, row["P_high"])
+
+
 def _groups(seeds):
     """Crack groups of analysed held-out images with their true majority type."""
     out = []
