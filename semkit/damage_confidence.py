@@ -101,8 +101,9 @@ def p_confidence(area, prob, *, trusted=None, group=None, mixed="exclude",
     a_t, a_s = _draw_areas(t_area, t_prob, mixed, t_tf, np.random.default_rng(_SEED))
     with np.errstate(divide="ignore", invalid="ignore"):
         p = np.where(a_s > 0, a_t / a_s, np.inf)
+        # between two draws without shear the quantile is inf - inf: NaN, read as open below
+        lo, hi = np.quantile(p, P_BAND)
     no_shear = float(np.mean(a_s <= 0))
-    lo, hi = np.quantile(p, P_BAND)
     out.update(P_low=float(lo) if np.isfinite(lo) else float("nan"),
                P_high=float(hi) if np.isfinite(hi) else float("nan"))
     reasons = []
