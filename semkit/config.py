@@ -341,6 +341,17 @@ REJECT_RIM_MIN_SHARE = 0.6
 REJECT_RIM_MIN_WIDTH_PX = 2.5
 #: objects smaller than this (px) are not judged: too few pixels for their statistics
 REJECT_MIN_AREA_PX = 30
+#: the dark edge of a step between two phases (a grain boundary's rim, however thin): core
+#: less than this share of the contrast below the darker side, the two sides of its ring
+#: (25th and 75th percentiles) at least this share apart, shorter than this many widths, and
+#: judged from this size on. A 22-px, 1-px-wide crack along a phase boundary (``semkit.synth``,
+#: slenderness 11.8, side_depth 0.08) is as shallow and on as high a step: only its length
+#: tells it apart (the boundary segments of the drawn-crack family: slenderness 3.3 median,
+#: 90 % under 6.5)
+REJECT_EDGE_DEPTH = 0.2
+REJECT_EDGE_STEP = 0.6
+REJECT_EDGE_MAX_SLENDERNESS = 8.0
+REJECT_EDGE_MIN_AREA_PX = 15
 #: compact dark phase (biotite, opaque mineral): skeleton length under this many mean widths,
 #: at least this wide, and not reaching the crack core grey (an open void does: a pore)
 REJECT_COMPACT_SLENDERNESS = 3.0

@@ -7,6 +7,10 @@ Every cleaned object gets a few measures (:func:`object_evidence`):
   of that side's contrast to the crack core.
   A crack is darker than the rock on both of its sides; the dark rim at the edge of a bright
   grain (a halo, a boundary line) is darker only than the bright side.
+* ``side_step`` — the ring's 75th minus its 25th percentile, in the same unit: small around
+  an object inside one grain, large on a step between two phases. A short, shallow object on
+  a step is the dark edge of a grain boundary (``phase_edge``), however thin; a crack along a
+  phase boundary is deeper or longer.
 * ``encloses_px``, ``hole_lift`` — area of the holes the object closes around, and how much
   brighter they are than the darker side outside (share of the contrast): a ring around a
   brighter grain is that grain's rim (a halo), however long; a crack network closing around a
@@ -56,6 +60,10 @@ RULES = (
     ("phase_rim", lambda e: (e.side_depth < config.REJECT_SIDE_DEPTH)
      & (e.slenderness < config.REJECT_RIM_MAX_SLENDERNESS)
      & (e.width_px >= config.REJECT_RIM_MIN_WIDTH_PX)),
+    ("phase_edge", lambda e: (e.side_depth < config.REJECT_EDGE_DEPTH)
+     & (e.side_step >= config.REJECT_EDGE_STEP)
+     & (e.slenderness < config.REJECT_EDGE_MAX_SLENDERNESS)
+     & (e.area_px >= config.REJECT_EDGE_MIN_AREA_PX)),
     ("grain_rim", lambda e: (e.encloses_px >= config.REJECT_RIM_LOOP_PX)
      & (e.encloses_px >= config.REJECT_RIM_HOLE_SHARE * e.area_px)
      & (e.hole_lift >= config.REJECT_RIM_HOLE_LIFT)
@@ -161,7 +169,8 @@ def object_evidence(labels, n, grey, *, crack_level, noise, skeleton=None, regio
     Returns
     -------
     evidence : pandas.DataFrame
-        Index 1..n: ``area_px, side_depth, encloses_px, hole_lift, rim_share, elongation,
+        Index 1..n: ``area_px, side_depth, side_step, encloses_px, hole_lift, rim_share,
+        elongation,
         width_px, slenderness, background_rel, density, neighbours, texture``.
     """
     import cv2
@@ -174,8 +183,9 @@ def object_evidence(labels, n, grey, *, crack_level, noise, skeleton=None, regio
     # the object's dark core: its 20th percentile (a thin crack is mostly partial-volume rim)
     core = _label_percentiles(g[on], lab_on, n, (20.0,), std=False)[0][0]
     ring, ring_lab = _ring(lab)
-    (ring_lo,), ring_sd = _label_percentiles(g[ring], ring_lab, n, (25.0,))
+    (ring_lo, ring_hi), ring_sd = _label_percentiles(g[ring], ring_lab, n, (25.0, 75.0))
     side_depth = (ring_lo - core) / np.maximum(ring_lo - float(crack_level), 1e-3)
+    side_step = (ring_hi - ring_lo) / np.maximum(ring_lo - float(crack_level), 1e-3)
     area, cx, cy, mxx, myy, mxy, _, _ = object_moments(lab, n)
     half = 0.5 * (mxx + myy)
     disc = np.sqrt(0.25 * (mxx - myy) ** 2 + mxy ** 2)
@@ -236,7 +246,8 @@ def object_evidence(labels, n, grey, *, crack_level, noise, skeleton=None, regio
                                 np.clip(np.rint(cx).astype(int), 0, lab.shape[1] - 1),
                                 config.ZONE_NEIGHBOUR_WINDOW_PX) - (area >= 5)
     texture = ring_sd / max(float(noise), 1e-6)
-    ev = pd.DataFrame(dict(area_px=area, side_depth=side_depth, encloses_px=encloses,
+    ev = pd.DataFrame(dict(area_px=area, side_depth=side_depth, side_step=side_step,
+                           encloses_px=encloses,
                            hole_lift=hole_lift, rim_share=rim_share,
                            elongation=elong, width_px=width,
                            slenderness=sk / np.maximum(width, 1e-9),
@@ -261,6 +272,8 @@ def reject_objects(evidence):
     out = pd.Series("", index=evidence.index, dtype=object)
     judged = (evidence["area_px"] >= config.REJECT_MIN_AREA_PX).to_numpy(bool)
     for name, rule in RULES:
-        hit = rule(evidence).fillna(False).to_numpy(bool) & judged
+        hit = rule(evidence).fillna(False).to_numpy(bool)
+        if name != "phase_edge":  # its own size floor: its evidence holds on small objects
+            hit = hit & judged
         out[(out == "") & hit] = name
     return out
