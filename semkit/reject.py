@@ -62,8 +62,7 @@ RULES = (
      & (e.width_px >= config.REJECT_RIM_MIN_WIDTH_PX)),
     ("phase_edge", lambda e: (e.side_depth < config.REJECT_EDGE_DEPTH)
      & (e.side_step >= config.REJECT_EDGE_STEP)
-     & (e.slenderness < config.REJECT_EDGE_MAX_SLENDERNESS)
-     & (e.area_px >= config.REJECT_EDGE_MIN_AREA_PX)),
+     & (e.slenderness < config.REJECT_EDGE_MAX_SLENDERNESS)),
     ("grain_rim", lambda e: (e.encloses_px >= config.REJECT_RIM_LOOP_PX)
      & (e.encloses_px >= config.REJECT_RIM_HOLE_SHARE * e.area_px)
      & (e.hole_lift >= config.REJECT_RIM_HOLE_LIFT)
@@ -79,6 +78,9 @@ RULES = (
      & (e.neighbours >= config.REJECT_MOTTLED_NEIGHBOURS)
      & (e.side_depth < config.REJECT_ZONE_MAX_DEPTH)),
 )
+#: the size (px) from which a rule judges an object: REJECT_MIN_AREA_PX, except where the
+#: rule's evidence holds on smaller objects
+RULE_MIN_AREA_PX = {"phase_edge": config.REJECT_EDGE_MIN_AREA_PX}
 
 
 def _label_percentiles(values, lab, n, qs, bins=256, std=True):
@@ -170,8 +172,7 @@ def object_evidence(labels, n, grey, *, crack_level, noise, skeleton=None, regio
     -------
     evidence : pandas.DataFrame
         Index 1..n: ``area_px, side_depth, side_step, encloses_px, hole_lift, rim_share,
-        elongation,
-        width_px, slenderness, background_rel, density, neighbours, texture``.
+        elongation, width_px, slenderness, background_rel, density, neighbours, texture``.
     """
     import cv2
 
@@ -247,8 +248,7 @@ def object_evidence(labels, n, grey, *, crack_level, noise, skeleton=None, regio
                                 config.ZONE_NEIGHBOUR_WINDOW_PX) - (area >= 5)
     texture = ring_sd / max(float(noise), 1e-6)
     ev = pd.DataFrame(dict(area_px=area, side_depth=side_depth, side_step=side_step,
-                           encloses_px=encloses,
-                           hole_lift=hole_lift, rim_share=rim_share,
+                           encloses_px=encloses, hole_lift=hole_lift, rim_share=rim_share,
                            elongation=elong, width_px=width,
                            slenderness=sk / np.maximum(width, 1e-9),
                            background_rel=background_rel, density=density,
@@ -270,10 +270,9 @@ def reject_objects(evidence):
     rejected_as : pandas.Series of str
     """
     out = pd.Series("", index=evidence.index, dtype=object)
-    judged = (evidence["area_px"] >= config.REJECT_MIN_AREA_PX).to_numpy(bool)
+    area = evidence["area_px"].to_numpy(float)
     for name, rule in RULES:
-        hit = rule(evidence).fillna(False).to_numpy(bool)
-        if name != "phase_edge":  # its own size floor: its evidence holds on small objects
-            hit = hit & judged
+        judged = area >= RULE_MIN_AREA_PX.get(name, config.REJECT_MIN_AREA_PX)
+        hit = rule(evidence).fillna(False).to_numpy(bool) & judged
         out[(out == "") & hit] = name
     return out

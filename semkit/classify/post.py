@@ -72,8 +72,11 @@ def classify_post(crack_labels, *, image=None, skeleton=None, background=None,
         ``p_tensile, p_shear, p_mixed`` all three; ``type_post_ok`` False (with
         ``type_note``) when the group's features lie outside the trained range or its
         skeleton is shorter than ``MIN_SKELETON_PX``. ``frac_*`` are 1 for the type and 0
-        otherwise; ``tensile_fraction`` = p_tensile / (p_tensile + p_shear) (how a mixed
-        crack splits with ``image_damage(mixed="split")``); the features are the group's.
+        otherwise, or, for an object of a group typed in pieces (longer than the trained
+        range), its pixel shares of the pieces' types, with ``type_post`` the largest and the
+        probabilities the pieces' pixel-weighted mean; ``tensile_fraction`` = p_tensile /
+        (p_tensile + p_shear) (how a mixed crack splits with
+        ``image_damage(mixed="split")``); the features are the group's.
     type_image : (M, N) ndarray of int8
         0 none, 1 tensile, 2 shear, 3 mixed.
 
@@ -153,7 +156,6 @@ def _post_table(crack_labels, *, image=None, skeleton=None, background=None, cra
     for j, name in enumerate(FEATURE_NAMES):
         table[name] = Fg[at, j]
     return table, code
-
 
 
 def _type_by_pieces(lab, ids, group_of, long_groups, local, pg, onehot, ok, notes, *, model,
