@@ -59,13 +59,48 @@ def family(settings="train"):
     return dict(base, n_cracks=(14, 24), drawn_share=1.0)
 
 
-def score_image(k, settings="train"):
+def add_laths(image, truth, n, seed):
+    """``image`` with ``n`` dark laths (not cracks): rectangles 30-100 x 5-12 px at random
+    angles, away from the cracks, blurred like them, at a grey 35-60 % of the way from the
+    crack grey to the rock around them (a dark mineral's laths, e.g. biotite), with a third of
+    the image's noise on them."""
+    import cv2
+    from scipy import ndimage as ndi
+    rng = np.random.default_rng(seed)
+    st = truth["settings"]
+    scale = 257.0 if image.dtype == np.uint16 else 1.0
+    g = image.astype(np.float64) / scale
+    keep_out = ndi.binary_dilation(truth["coverage"] > 0, iterations=6)
+    lath = np.zeros(image.shape, np.float32)
+    placed = tries = 0
+    while placed < n and tries < 20 * n:
+        tries += 1
+        cy, cx = rng.uniform(30, image.shape[0] - 30), rng.uniform(30, image.shape[1] - 30)
+        box = cv2.boxPoints(((cx, cy), (rng.uniform(30, 100), rng.uniform(5, 12)),
+                             rng.uniform(0, 180))).astype(np.int32)
+        m = np.zeros(image.shape, np.uint8)
+        cv2.fillPoly(m, [box], 1)
+        if (m.view(bool) & keep_out).any():
+            continue
+        np.maximum(lath, m.astype(np.float32), out=lath)
+        placed += 1
+    lath = ndi.gaussian_filter(lath, st["blur"])
+    grey = st["crack_grey"] + rng.uniform(0.35, 0.6) * (ndi.median_filter(g, 15)
+                                                       - st["crack_grey"])
+    g = g * (1 - lath) + (grey + rng.normal(0, st["noise"] / 3, g.shape)) * lath
+    top = 65535 if scale > 1 else 255
+    return np.clip(np.rint(g * scale), 0, top).astype(image.dtype)
+
+
+def score_image(k, settings="train", laths=0):
     """Analyse drawn scene ``k``; its truth, semkit's numbers and the errors (a dict)."""
     import render
 
     from semkit.analysis import analyse_image
     from semkit.evaluate import centreline_scores
     image, truth = render.drawn_scene(SHAPE, family(settings), seed=SEED0 + k)
+    if laths:
+        image = add_laths(image, truth, laths, seed=k)
     a = analyse_image(image, pixel_size_um=1.0, name=f"drawn_{k}", stage="failure",
                       classify=False)
     row = a.summary()
@@ -88,12 +123,15 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--n", type=int, default=16, help="scenes (seeds SEED0 .. SEED0 + N - 1)")
     ap.add_argument("--jobs", type=int, default=2)
+    ap.add_argument("--laths", type=int, default=0,
+                    help="add this many dark laths (not cracks) to each scene")
     ap.add_argument("--settings", choices=["train", "heldout"], default="train",
                     help="the typing family's settings to render with (heldout: noise 7-10, "
                          "blur 0.9-1.3 px, 2-3x gradient, grains 20-40 px, crack grey 40-60)")
     args = ap.parse_args(argv)
     with ProcessPoolExecutor(args.jobs) as ex:
-        rows = list(ex.map(score_image, range(args.n), [args.settings] * args.n))
+        rows = list(ex.map(score_image, range(args.n), [args.settings] * args.n,
+                           [args.laths] * args.n))
     s = summarise(rows)
     pe = np.array([r["path_length_err"] for r in rows])
     s.update(path_length_err_median=float(np.median(np.abs(pe))),
@@ -102,8 +140,10 @@ def main(argv=None):
              precision_median=float(np.median([r["precision"] for r in rows])))
     OUT.mkdir(parents=True, exist_ok=True)
     meta = dict(machine=platform.machine(), cpus=os.cpu_count(), load=os.getloadavg(),
-                shape=SHAPE, seed0=SEED0, settings=args.settings, family=family(args.settings))
-    name = "drawn_family.json" if args.settings == "train" else "drawn_family_heldout.json"
+                shape=SHAPE, seed0=SEED0, settings=args.settings, laths=args.laths,
+                family=family(args.settings))
+    name = "drawn_family" + ("" if args.settings == "train" else "_heldout") \
+        + (f"_laths{args.laths}" if args.laths else "") + ".json"
     (OUT / name).write_text(json.dumps(dict(meta=meta, summary=s, per_image=rows),
                                                       indent=1, default=float))
     print("| measure | median |error| (all) | median |error| (valid) | signed median |")
