@@ -76,6 +76,13 @@ THIN_ONLY_CRACK_RATIO = 0.3
 #: volume, not the void grey (read as the crack grey, it inflated the areas of the hairline
 #: images of benchmarks/line_family.py by 6-285 %, median 63 %).
 MIN_FLAT_CORE_PX = 10
+#: components of the dark class whose plateau (median of at least VOID_PLATEAU_MIN_PX flat-core
+#: pixels) lies more than VOID_PLATEAU_BAND noise sigmas, and VOID_PLATEAU_CONTRAST of the
+#: mineral-to-void contrast, above the darkest open (non-pore) plateau are a dark phase's laths:
+#: left out of the crack and void greys
+VOID_PLATEAU_MIN_PX = 20
+VOID_PLATEAU_BAND = 6.0
+VOID_PLATEAU_CONTRAST = 0.15
 FLAT_CORE_SIGMAS = 4.0
 FLAT_CORE_CONTRAST = 0.15
 #: when nothing is darker than the darkest mineral, the crack grey is this low percentile.

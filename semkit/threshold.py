@@ -224,14 +224,17 @@ def dark_class_levels(image) -> DarkLevels:
         dark = (sub < seed).view(np.uint8)
         interior = cv2.erode(dark, np.ones((3, 3), np.uint8)).view(bool)
         core = sub[interior]
-        flat = _flat_core_values(
+        flat, flat_at = _flat_core_values(
             a, interior, step, max(config.FLAT_CORE_SIGMAS * sn, config.FLAT_CORE_CONTRAST
                                    * (mineral - float(np.median(core))))) \
-            if core.size >= 20 else np.zeros(0, np.float32)
+            if core.size >= 20 else (np.zeros(0, np.float32), np.zeros(0, np.int64))
         resolved = flat.size >= config.MIN_FLAT_CORE_PX
         if resolved:
             crack = float(np.median(core))
-            flat_crack = float(np.median(flat))
+            # the void grey leaves out plateaus at a brighter grey (laths of a dark mineral);
+            # detection keeps the dark class's median (its levels were set on it)
+            void = _void_components(dark, flat, flat_at, sn, mineral)
+            flat_crack = float(np.median(flat if void is None else flat[void]))
         else:  # all cracks thin: their darkest values are partial volumes; the core is
             # assumed at least as dark as 30 % of the darkest mineral (epoxy / void in BSE)
             th, tc = _hist(tail, float(tail.min()), float(seed), bins=64)
@@ -243,10 +246,11 @@ def dark_class_levels(image) -> DarkLevels:
 
 def _flat_core_values(image, interior, step, max_range):
     """Grey of the ``interior`` pixels (of the image subsampled by ``step``) that have a flat
-    3 x 3 neighbourhood in the full image: grey range at most ``max_range``."""
+    3 x 3 neighbourhood in the full image: grey range at most ``max_range``; and the flat
+    pixels' raveled indices in the subsampled image."""
     from . import _kernels
-    rr, cc = _kernels.pixel_coords(interior)
-    rr, cc = rr * step, cc * step
+    rr0, cc0 = _kernels.pixel_coords(interior)
+    rr, cc = rr0 * step, cc0 * step
     h, w = image.shape
     ok = (rr > 0) & (cc > 0) & (rr < h - 1) & (cc < w - 1)
     rr, cc = rr[ok], cc[ok]
@@ -257,7 +261,52 @@ def _flat_core_values(image, interior, step, max_range):
             v = image[rr + i, cc + j]
             np.minimum(lo, v, out=lo)
             np.maximum(hi, v, out=hi)
-    return image[rr, cc][hi - lo <= max_range]
+    flat = hi - lo <= max_range
+    at = (rr0[ok][flat].astype(np.int64) * interior.shape[1] + cc0[ok][flat])
+    return image[rr, cc][flat], at
+
+
+def _void_components(dark, flat, flat_at, noise, mineral):
+    """Which components of the dark class hold the void, when their plateaus lie at two greys.
+
+    Every 8-connected component of ``dark`` with at least ``VOID_PLATEAU_MIN_PX`` flat-core
+    pixels has a plateau grey (their median). Compact components (pores) aside, the darkest
+    plateau is the void; components whose plateau lies more than ``VOID_PLATEAU_BAND`` above
+    it (noise sigmas, or that share of the mineral-to-void contrast, whichever is larger) are
+    a dark phase (laths of a dark mineral), not open cracks.
+
+    Returns
+    -------
+    keep : (len(flat),) ndarray of bool or None
+        Which flat-core pixels lie in a component that holds the void; None when no plateau
+        stands apart (every pixel is kept).
+    """
+    import cv2
+
+    from .measure import is_pore, object_moments
+    n, comp = cv2.connectedComponents(dark, connectivity=8)
+    lab = comp.ravel()[flat_at]
+    cnt = np.bincount(lab, minlength=n)
+    big = np.flatnonzero(cnt >= config.VOID_PLATEAU_MIN_PX)
+    big = big[big > 0]
+    if big.size < 2:
+        return None
+    order = np.argsort(lab, kind="stable")
+    starts = np.r_[0, np.cumsum(cnt)[:-1]]
+    plateau = np.array([np.median(flat[order[starts[k]:starts[k] + cnt[k]]]) for k in big])
+    area, _, _, mxx, myy, mxy, _, _ = object_moments(comp, n - 1)
+    open_ = ~is_pore(area[big], mxx[big], myy[big], mxy[big])
+    if not open_.any():
+        return None
+    void = float(plateau[open_].min())
+    band = max(config.VOID_PLATEAU_BAND * noise,
+               config.VOID_PLATEAU_CONTRAST * (float(mineral) - void))
+    above = plateau > void + band
+    if not above.any():
+        return None
+    keep = np.ones(n, bool)
+    keep[big[above]] = False
+    return keep[lab]
 
 
 def line_crack_level(image, mineral, noise, *, closed=None):
