@@ -558,6 +558,14 @@ class CrackAnalysis:
             notes.append(f"faint continuations: ridge lines carry on from the detected cracks "
                          f"({cont:.2f} px per px of crack length) where the threshold found "
                          "nothing: cracks were found only in part: check the overlay")
+        phase = self.thresholded.dark_phase_share if self.options.segmenter is None else 0.0
+        gap = self._void_gap() if phase >= config.DARK_PHASE_MIN_SHARE else 0.0
+        if gap >= config.DARK_PHASE_MAX_GAP:
+            notes.append(f"dark phase: the dark class's grey lies {gap:.2f} of the contrast "
+                         f"above the void grey of the open cracks, and {phase:.0%} of its flat "
+                         "cores are plateaus brighter than the void: a brighter dark phase "
+                         "(laths, a dark mineral) is in the dark class and may be counted as "
+                         "crack: check the overlay")
         share, by_rule = self._zone_rejected_share()
         if share >= config.REJECT_MAX_ZONE_SHARE:
             rules = ", ".join(f"{k} {v:.0%}" for k, v in by_rule.items())
@@ -612,6 +620,21 @@ class CrackAnalysis:
         far = ridge & lookup(touching, lab) & ~cv2.dilate(det, np.ones((5, 5), np.uint8)).view(bool)
         length = float(self.cracks["length_px"].sum()) if not self.cracks.empty else 0.0
         return float(np.count_nonzero(far)) / length if length > 0 else 0.0
+
+    def _void_gap(self):
+        """How far the dark class's median grey (``crack_level``) lies above the void grey
+        (``void_level``), as a share of the contrast from it to the sample's median local
+        background (read on every 4th pixel; 0 without the ``auto`` threshold or with a segmenter). A dark class
+        made of open cracks and their partly resolved rims stays within a tenth of the
+        contrast of its void; one that holds a brighter dark phase is pulled up by it."""
+        if self.options.segmenter is not None:
+            return 0.0
+        t = self.thresholded
+        if t.method != "auto" or not (np.isfinite(t.crack_level) and np.isfinite(t.void_level)) \
+                or t.background is None or not t.mask.any():
+            return 0.0
+        bg = float(np.median(t.background[::4, ::4][self.region.mask[::4, ::4]]))
+        return float((t.crack_level - t.void_level) / max(bg - t.crack_level, 1e-3))
 
     def _zone_rejected_share(self):
         """Share of the dark objects' area (pores aside) that the zone and shape rules

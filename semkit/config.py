@@ -390,6 +390,18 @@ FAINT_MAX_LENGTH_SHARE = 0.2
 #: length is flagged: the cracks were found only in part (development family: the under-read
 #: images 0.15-0.19, every other image <= 0.045; 1-px hairlines blurred by 1.4 px: 14.5)
 CONTINUATION_MAX_SHARE = 0.1
+#: an image whose dark class's median grey (the crack grey detection works from) lies at least
+#: DARK_PHASE_MAX_GAP of the contrast above the void grey (the darkest plateau of the open
+#: cracks), with at least DARK_PHASE_MIN_SHARE of the dark class's flat cores on plateaus
+#: brighter than the void, is flagged: a brighter dark phase (laths or grains of a dark
+#: mineral) fills the dark class and may be counted as crack. Drawn family with 4 or 12 dark
+#: laths: gap 0.22-0.35 with plateau share 0.62-0.84 where the laths shift it. Without the
+#: plateau share, the partly resolved cores of many thin cracks raise the gap as well (1.5-8
+#: px lines under a 1.4 px blur: 0.32, plateau share 0.20, areas right within 3 %).
+#: Development, drawn and drawn-held-out families, semkit.synth speed set, micro-CT tuning
+#: slices, granite, shale: gap <= 0.11.
+DARK_PHASE_MAX_GAP = 0.2
+DARK_PHASE_MIN_SHARE = 0.4
 #: side of the grey closing giving an object's local background (fills cracks narrower), px
 ZONE_CLOSING_PX = 21
 #: side of the window of the detection density, px

@@ -45,6 +45,9 @@ class DarkLevels:
     resolved: bool = True
     #: median grey of the flat interior pixels (the plateaus); NaN when not resolved
     flat_crack: float = float("nan")
+    #: share of the flat interior pixels on plateaus left out of the void grey (a brighter
+    #: dark phase, :func:`_void_components`); 0 when none stands apart
+    phase_share: float = 0.0
 
 
 @dataclasses.dataclass
@@ -83,6 +86,9 @@ class ThresholdResult:
     #: void grey (``auto`` only): the crack grey read on flat cores (plateaus) when some crack
     #: shows one, else ``crack_level``; areas are measured against it
     void_level: float = float("nan")
+    #: share of the dark class's flat cores on plateaus brighter than the void (a dark phase,
+    #: ``DarkLevels.phase_share``; ``auto`` only)
+    dark_phase_share: float = 0.0
 
     @property
     def contrast_to_noise(self) -> float:
@@ -218,6 +224,7 @@ def dark_class_levels(image) -> DarkLevels:
     n_dark = int(tail.size * a.size / max(sub.size, 1))
     crack = flat_crack = float("nan")
     resolved = True
+    phase_share = 0.0
     if tail.size >= 20:
         # interior pixels of cracks >= 3 px wide carry the core grey; thin cracks only
         # partial volumes, so they are used only when there is no interior at all
@@ -235,13 +242,14 @@ def dark_class_levels(image) -> DarkLevels:
             # detection keeps the dark class's median (its levels were set on it)
             void = _void_components(dark, flat, flat_at, sn, mineral)
             flat_crack = float(np.median(flat if void is None else flat[void]))
+            phase_share = 0.0 if void is None else 1.0 - float(np.mean(void))
         else:  # all cracks thin: their darkest values are partial volumes; the core is
             # assumed at least as dark as 30 % of the darkest mineral (epoxy / void in BSE)
             th, tc = _hist(tail, float(tail.min()), float(seed), bins=64)
             crack = min(float(tc[int(np.argmax(smooth_profile(th, 1.5)))]),
                         config.THIN_ONLY_CRACK_RATIO * mineral)
     return DarkLevels(mineral, float(sigma), crack, float(seed), n_dark, sn, resolved=resolved,
-                      flat_crack=flat_crack)
+                      flat_crack=flat_crack, phase_share=phase_share)
 
 
 def _flat_core_values(image, interior, step, max_range):
@@ -499,7 +507,7 @@ def threshold_auto(image, *, area_fraction=config.AUTO_AREA_FRACTION,
     note = "; ".join(t for t in (note0, note) if t)
     return ThresholdResult(area, detect, "auto", value, frac, ok, note, background=bg,
                            crack_level=lv.crack, noise=sd, contrast=lv.mineral - lv.crack,
-                           void_level=void)
+                           void_level=void, dark_phase_share=lv.phase_share)
 
 
 def coverage(image, background, crack_level):

@@ -310,3 +310,53 @@ def test_the_void_grey_leaves_out_the_plateaus_of_dark_laths():
     lv = dark_class_levels(_lath_scene())
     assert abs(lv.flat_crack - 30.0) < 0.05 * (170.0 - 30.0), lv
     assert lv.crack > 60.0, lv
+
+
+def _synth_with_laths(n_laths, seed=3):
+    """A ``semkit.synth`` post-test image (8 cracks 3-8 px wide) with ``n_laths`` laths of a
+    dark mineral (30-80 x 6-10 px, 6 px or more from every crack) at a grey 0.45 of the way
+    from the crack grey to the rock around them."""
+    import cv2
+
+    from semkit.synth import CRACK_GREY, make_sem_image
+    s = make_sem_image((384, 512), stage="post", seed=seed, n_cracks=8, widths=(3.0, 8.0))
+    g = s.image.astype(np.float32)
+    rng = np.random.default_rng(seed)
+    keep_out = cv2.dilate(s.crack_mask.astype(np.uint8), np.ones((13, 13), np.uint8)) > 0
+    lath = np.zeros(g.shape, np.float32)
+    placed = 0
+    while placed < n_laths:
+        box = cv2.boxPoints(((rng.uniform(30, 482), rng.uniform(30, 354)),
+                             (rng.uniform(30, 80), rng.uniform(6, 10)),
+                             rng.uniform(0, 180))).astype(np.int32)
+        m = np.zeros(g.shape, np.uint8)
+        cv2.fillPoly(m, [box], 1)
+        if (m.astype(bool) & keep_out).any():
+            continue
+        np.maximum(lath, m.astype(np.float32), out=lath)
+        placed += 1
+    lath = cv2.GaussianBlur(lath, (0, 0), 0.8)
+    grey = CRACK_GREY + 0.45 * (cv2.medianBlur(s.image, 15).astype(np.float32) - CRACK_GREY)
+    return g * (1 - lath) + grey * lath, s
+
+
+def test_an_image_whose_dark_class_holds_a_dark_phase_is_flagged():
+    """22 laths of a dark mineral pull the dark class's grey from the void (34) to 62, 0.23
+    of the contrast, and their area is counted as crack (+83 %); their plateaus hold 83 % of
+    the dark class's flat cores: the image is flagged ``dark phase``. Without the laths the
+    dark class stays at its void and the area is right; no flag. (Thin cracks raise the gap
+    too, without plateaus: ``test_areas_are_measured_against_the_void_grey_of_the_flat_cores``
+    keeps those images valid.)"""
+    from semkit.analysis import analyse_image
+    img, s = _synth_with_laths(22)
+    a = analyse_image(img, pixel_size_um=1.0, stage="failure", classify=False)
+    assert a._void_gap() > 0.2 and a.thresholded.dark_phase_share > 0.6
+    row = a.summary()
+    assert row["crack_area_um2"] > 1.5 * s.cracks["area_cov_px"].sum()
+    assert not row["valid"] and "dark phase" in row["valid_note"], row["valid_note"]
+    img, s = _synth_with_laths(0)
+    c = analyse_image(img, pixel_size_um=1.0, stage="failure", classify=False)
+    assert c._void_gap() < 0.05
+    row = c.summary()
+    assert abs(row["crack_area_um2"] / s.cracks["area_cov_px"].sum() - 1) < 0.05
+    assert "dark phase" not in row["valid_note"]
