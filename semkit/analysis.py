@@ -624,9 +624,10 @@ class CrackAnalysis:
     def _void_gap(self):
         """How far the dark class's median grey (``crack_level``) lies above the void grey
         (``void_level``), as a share of the contrast from it to the sample's median local
-        background (read on every 4th pixel; 0 without the ``auto`` threshold or with a segmenter). A dark class
-        made of open cracks and their partly resolved rims stays within a tenth of the
-        contrast of its void; one that holds a brighter dark phase is pulled up by it."""
+        background (read on every 4th pixel; 0 without the ``auto`` threshold or with a
+        segmenter). A dark class made of open cracks stays within a tenth of the contrast of
+        its void; one that holds a brighter dark phase, or the partly resolved cores of many
+        thin cracks, is pulled up."""
         if self.options.segmenter is not None:
             return 0.0
         t = self.thresholded
