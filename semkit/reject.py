@@ -235,7 +235,18 @@ def object_evidence(labels, n, grey, *, crack_level, noise, skeleton=None, regio
     if loop.any():
         # share of the object that hugs a hole: within its own width (+1.5 px) of one (only
         # for objects closing a bright loop, the ones the grain-rim rule judges)
-        d = cv2.distanceTransform((~holes).view(np.uint8), cv2.DIST_L2, 3)
+        # the distance is read only where it can pass the test: within the widest loop
+        # object's reach of the loop objects (a chamfer path of k steps is >= 0.955 k long,
+        # so a box that much wider holds every path that short: same distances as the whole
+        # image's)
+        reach = float(np.max(width[loop])) + 1.5
+        m = int(np.ceil(reach / 0.955)) + 2
+        rows, cols = np.nonzero(np.any(loop[lab], axis=1)), np.nonzero(np.any(loop[lab], axis=0))
+        r0, r1 = max(int(rows[0][0]) - m, 0), min(int(rows[0][-1]) + m + 1, h)
+        c0, c1 = max(int(cols[0][0]) - m, 0), min(int(cols[0][-1]) + m + 1, w)
+        d = np.full((h, w), np.inf, np.float32)
+        d[r0:r1, c0:c1] = cv2.distanceTransform(
+            np.ascontiguousarray(~holes[r0:r1, c0:c1]).view(np.uint8), cv2.DIST_L2, 3)
         hug = d[on] <= width[lab_on] + 1.5
         rim_share = np.where(loop, np.bincount(lab_on, weights=hug, minlength=n + 1)[:n + 1]
                              / np.maximum(area, 1.0), np.nan)
@@ -269,10 +280,14 @@ def reject_objects(evidence):
     -------
     rejected_as : pandas.Series of str
     """
-    out = pd.Series("", index=evidence.index, dtype=object)
-    area = evidence["area_px"].to_numpy(float)
+    import types
+
+    # the rules read the columns as arrays (a NaN measure meets no test)
+    e = types.SimpleNamespace(**{c: evidence[c].to_numpy(float) for c in evidence.columns})
+    why = np.full(len(evidence), "", dtype=object)
     for name, rule in RULES:
-        judged = area >= RULE_MIN_AREA_PX.get(name, config.REJECT_MIN_AREA_PX)
-        hit = rule(evidence).fillna(False).to_numpy(bool) & judged
-        out[(out == "") & hit] = name
-    return out
+        judged = e.area_px >= RULE_MIN_AREA_PX.get(name, config.REJECT_MIN_AREA_PX)
+        with np.errstate(invalid="ignore"):
+            hit = np.asarray(rule(e), bool) & judged
+        why[(why == "") & hit] = name
+    return pd.Series(why, index=evidence.index, dtype=object)
