@@ -240,9 +240,8 @@ def dark_class_levels(image) -> DarkLevels:
             crack = float(np.median(core))
             # the void grey leaves out plateaus at a brighter grey (laths of a dark mineral);
             # detection keeps the dark class's median (its levels were set on it)
-            void = _void_components(dark, flat, flat_at, sn, mineral)
+            void, phase_share = _void_components(dark, flat, flat_at, sn, mineral, step)
             flat_crack = float(np.median(flat if void is None else flat[void]))
-            phase_share = 0.0 if void is None else 1.0 - float(np.mean(void))
         else:  # all cracks thin: their darkest values are partial volumes; the core is
             # assumed at least as dark as 30 % of the darkest mineral (epoxy / void in BSE)
             th, tc = _hist(tail, float(tail.min()), float(seed), bins=64)
@@ -274,47 +273,54 @@ def _flat_core_values(image, interior, step, max_range):
     return image[rr, cc][flat], at
 
 
-def _void_components(dark, flat, flat_at, noise, mineral):
-    """Which components of the dark class hold the void, when their plateaus lie at two greys.
+def _void_components(dark, flat, flat_at, noise, mineral, step=1):
+    """Which flat-core pixels of the dark class hold the void of the open cracks.
 
-    Every 8-connected component of ``dark`` with at least ``VOID_PLATEAU_MIN_PX`` flat-core
-    pixels has a plateau grey (their median). Compact components (pores) aside, the darkest
-    plateau is the void; components whose plateau lies more than ``VOID_PLATEAU_BAND`` above
-    it (noise sigmas, or that share of the mineral-to-void contrast, whichever is larger) are
-    a dark phase (laths of a dark mineral), not open cracks.
+    Pores (compact, full components of ``dark``, :func:`semkit.measure.is_pore` at the full
+    image's scale: ``dark`` is subsampled by ``step``) are left out when at least
+    ``MIN_FLAT_CORE_PX`` flat pixels remain: a pore's flat core, often darker than the
+    cracks' (a deeper hole), would otherwise outweigh the few flat pixels of cracks a few px
+    wide. Every other 8-connected component with at least ``VOID_PLATEAU_MIN_PX`` flat-core
+    pixels has a plateau grey (their median); the darkest is the void, and components whose
+    plateau lies more than ``VOID_PLATEAU_BAND`` above it (noise sigmas, or that share of the
+    mineral-to-void contrast, whichever is larger) are a dark phase (laths of a dark mineral),
+    not open cracks.
 
     Returns
     -------
     keep : (len(flat),) ndarray of bool or None
-        Which flat-core pixels lie in a component that holds the void; None when no plateau
-        stands apart (every pixel is kept).
+        Which flat-core pixels hold the void; None when every pixel does.
+    phase_share : float
+        Share of the flat-core pixels on the brighter plateaus (0 when none).
     """
     import cv2
 
     from .measure import is_pore, object_moments
     n, comp = cv2.connectedComponents(dark, connectivity=8)
     lab = comp.ravel()[flat_at]
-    cnt = np.bincount(lab, minlength=n)
-    big = np.flatnonzero(cnt >= config.VOID_PLATEAU_MIN_PX)
-    big = big[big > 0]
-    if big.size < 2:
-        return None
-    order = np.argsort(lab, kind="stable")
-    starts = np.r_[0, np.cumsum(cnt)[:-1]]
-    plateau = np.array([np.median(flat[order[starts[k]:starts[k] + cnt[k]]]) for k in big])
     area, _, _, mxx, myy, mxy, _, _ = object_moments(comp, n - 1)
-    open_ = ~is_pore(area[big], mxx[big], myy[big], mxy[big])
-    if not open_.any():
-        return None
-    void = float(plateau[open_].min())
-    band = max(config.VOID_PLATEAU_BAND * noise,
-               config.VOID_PLATEAU_CONTRAST * (float(mineral) - void))
-    above = plateau > void + band
-    if not above.any():
-        return None
+    s2 = float(step) ** 2
+    pore = is_pore(area * s2, mxx * s2, myy * s2, mxy * s2)
+    pore[0] = False
     keep = np.ones(n, bool)
-    keep[big[above]] = False
-    return keep[lab]
+    if np.count_nonzero(~pore[lab]) >= config.MIN_FLAT_CORE_PX:
+        keep &= ~pore
+    cnt = np.bincount(lab, minlength=n)
+    big = np.flatnonzero((cnt >= config.VOID_PLATEAU_MIN_PX) & keep)
+    big = big[big > 0]
+    above = np.zeros(0, bool)
+    if big.size:
+        order = np.argsort(lab, kind="stable")
+        starts = np.r_[0, np.cumsum(cnt)[:-1]]
+        plateau = np.array([np.median(flat[order[starts[k]:starts[k] + cnt[k]]]) for k in big])
+        void = float(plateau.min())
+        band = max(config.VOID_PLATEAU_BAND * noise,
+                   config.VOID_PLATEAU_CONTRAST * (float(mineral) - void))
+        above = plateau > void + band
+        keep[big[above]] = False
+    if keep[lab].all():
+        return None, 0.0
+    return keep[lab], float(cnt[big[above]].sum()) / max(len(flat), 1)
 
 
 def line_crack_level(image, mineral, noise, *, closed=None):
