@@ -45,8 +45,9 @@ class DarkLevels:
     resolved: bool = True
     #: median grey of the flat interior pixels (the plateaus); NaN when not resolved
     flat_crack: float = float("nan")
-    #: share of the flat interior pixels on plateaus left out of the void grey (a brighter
-    #: dark phase, :func:`_void_components`); 0 when none stands apart
+    #: share of the flat interior pixels on plateaus brighter than the void (a brighter dark
+    #: phase, left out of the void grey with the pores, :func:`_void_components`); 0 when none
+    #: stands apart
     phase_share: float = 0.0
 
 
