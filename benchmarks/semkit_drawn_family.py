@@ -59,24 +59,22 @@ def family(settings="train"):
     return dict(base, n_cracks=(14, 24), drawn_share=1.0)
 
 
-def add_laths(image, truth, n, seed):
-    """``image`` with ``n`` dark laths (not cracks): rectangles 30-100 x 5-12 px at random
-    angles, away from the cracks, blurred like them, at a grey 35-60 % of the way from the
-    crack grey to the rock around them (a dark mineral's laths, e.g. biotite), with a third of
-    the image's noise on them."""
+def paint_laths(image, keep_out, n, rng, *, blur, crack_grey, share=(0.35, 0.6),
+                noise=0.0, size=((30, 100), (5, 12))):
+    """``image`` with ``n`` dark laths (not cracks): rectangles of ``size`` (length, width
+    ranges, px) at random angles, outside ``keep_out``, blurred by ``blur`` px, at a grey a
+    share drawn from ``share`` of the way from ``crack_grey`` (8-bit units) to the rock around
+    them (a 15-px median), with ``noise`` grey of noise on them."""
     import cv2
     from scipy import ndimage as ndi
-    rng = np.random.default_rng(seed)
-    st = truth["settings"]
     scale = 257.0 if image.dtype == np.uint16 else 1.0
     g = image.astype(np.float64) / scale
-    keep_out = ndi.binary_dilation(truth["coverage"] > 0, iterations=6)
     lath = np.zeros(image.shape, np.float32)
     placed = tries = 0
     while placed < n and tries < 20 * n:
         tries += 1
         cy, cx = rng.uniform(30, image.shape[0] - 30), rng.uniform(30, image.shape[1] - 30)
-        box = cv2.boxPoints(((cx, cy), (rng.uniform(30, 100), rng.uniform(5, 12)),
+        box = cv2.boxPoints(((cx, cy), (rng.uniform(*size[0]), rng.uniform(*size[1])),
                              rng.uniform(0, 180))).astype(np.int32)
         m = np.zeros(image.shape, np.uint8)
         cv2.fillPoly(m, [box], 1)
@@ -84,12 +82,23 @@ def add_laths(image, truth, n, seed):
             continue
         np.maximum(lath, m.astype(np.float32), out=lath)
         placed += 1
-    lath = ndi.gaussian_filter(lath, st["blur"])
-    grey = st["crack_grey"] + rng.uniform(0.35, 0.6) * (ndi.median_filter(g, 15)
-                                                       - st["crack_grey"])
-    g = g * (1 - lath) + (grey + rng.normal(0, st["noise"] / 3, g.shape)) * lath
+    lath = ndi.gaussian_filter(lath, blur)
+    grey = crack_grey + rng.uniform(*share) * (ndi.median_filter(g, 15) - crack_grey)
+    g = g * (1 - lath) + (grey + rng.normal(0, noise, g.shape)) * lath
     top = 65535 if scale > 1 else 255
     return np.clip(np.rint(g * scale), 0, top).astype(image.dtype)
+
+
+def add_laths(image, truth, n, seed):
+    """``image`` with ``n`` dark laths (not cracks, :func:`paint_laths`): 30-100 x 5-12 px,
+    away from the cracks, blurred like them, at a grey 35-60 % of the way from the crack grey
+    to the rock around them (a dark mineral's laths, e.g. biotite), with a third of the
+    image's noise on them."""
+    from scipy import ndimage as ndi
+    st = truth["settings"]
+    keep_out = ndi.binary_dilation(truth["coverage"] > 0, iterations=6)
+    return paint_laths(image, keep_out, n, np.random.default_rng(seed), blur=st["blur"],
+                       crack_grey=st["crack_grey"], noise=st["noise"] / 3)
 
 
 def score_image(k, settings="train", laths=0):
