@@ -399,7 +399,7 @@ CONTINUATION_MAX_SHARE = 0.1
 #: plateau share, the partly resolved cores of many thin cracks raise the gap as well (1.5-8
 #: px lines under a 1.4 px blur: 0.32, plateau share 0.20, areas right within 3 %).
 #: Development, drawn and drawn-held-out families, semkit.synth speed set, micro-CT tuning
-#: slices, granite, shale: gap <= 0.11.
+#: slices, granite, 8 shale tiles: gap <= 0.11.
 DARK_PHASE_MAX_GAP = 0.2
 DARK_PHASE_MIN_SHARE = 0.4
 #: side of the grey closing giving an object's local background (fills cracks narrower), px
