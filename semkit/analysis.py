@@ -285,8 +285,23 @@ class CrackAnalysis:
     # stage 5
     @functools.cached_property
     def _labels(self):
+        """Objects: the 8-connected components of the cleaned mask, with those rejected as
+        ``dark_phase`` cut where they leave the dark phase (:func:`semkit.reject.
+        split_zone_objects`; the pieces in clear rock are judged on their own), and the
+        first reading of the evidence (``(evidence, origin, relief)``, None without the
+        rules)."""
         from .measure import label_cracks
-        return label_cracks(self.object_mask)
+        lab, n = label_cracks(self.object_mask)
+        if not self.options.reject or n == 0:
+            return lab, n, None
+        from .reject import reject_objects, split_zone_objects, zone_relief
+        relief = zone_relief(self.smooth, self.crack_level, self.region.mask)
+        ev = self._object_evidence(lab, n, relief)
+        cut = split_zone_objects(lab, n, reject_objects(ev).to_numpy(), relief)
+        if cut is None:
+            return lab, n, (ev, None, relief)
+        lab, n, origin = cut
+        return lab, n, (ev, origin, relief)
 
     @property
     def labels(self):
@@ -353,23 +368,41 @@ class CrackAnalysis:
         return float(lv.crack) if np.isfinite(lv.crack) else float(np.percentile(
             self.smooth[self.region.mask], config.DARKEST_PERCENT))
 
-    @functools.cached_property
-    def evidence(self):
-        """Shape and surroundings of every object (:func:`semkit.reject.object_evidence`)."""
+    def _object_evidence(self, labels, n, relief=None):
         from .reject import object_evidence
         from .threshold import noise_sigma
-        return object_evidence(self.labels, self.n_objects, self.smooth,
-                               crack_level=self.crack_level, noise=noise_sigma(self.smooth),
+        return object_evidence(labels, n, self.smooth, crack_level=self.crack_level,
+                               noise=noise_sigma(self.smooth),
                                skeleton=self.skeleton if self.options.length else None,
-                               region=self.region.mask)
+                               region=self.region.mask, relief=relief)
+
+    @functools.cached_property
+    def evidence(self):
+        """Shape and surroundings of every object (:func:`semkit.reject.object_evidence`).
+        Objects that :attr:`labels` left as they were keep their first reading (cut pieces
+        next to them would otherwise count as neighbours of theirs)."""
+        labels, n, first = self._labels
+        if first is not None and first[1] is None:
+            return first[0]
+        ev = self._object_evidence(labels, n, first[2] if first is not None else None)
+        if first is not None:
+            origin = first[1][1:]
+            keep = origin > 0
+            ev.iloc[np.flatnonzero(keep)] = first[0].loc[origin[keep]].to_numpy()
+        return ev
 
     @functools.cached_property
     def rejected_as(self):
-        """Per object (index = label): why it is not a crack, ``""`` when it is one."""
+        """Per object (index = label): why it is not a crack, ``""`` when it is one (the rest
+        of an object cut by :attr:`labels` keeps the verdict of the whole)."""
         if not self.options.reject or self.n_objects == 0:
             return pd.Series("", index=np.arange(1, self.n_objects + 1), dtype=object)
         from .reject import reject_objects
-        return reject_objects(self.evidence)
+        why = reject_objects(self.evidence)
+        first = self._labels[2]
+        if first is not None and first[1] is not None:
+            why[first[1][1:] < 0] = "dark_phase"
+        return why
 
     @functools.cached_property
     def _classified_objects(self):

@@ -53,7 +53,7 @@ import pandas as pd
 
 from . import config
 
-__all__ = ["object_evidence", "reject_objects", "RULES"]
+__all__ = ["object_evidence", "reject_objects", "split_zone_objects", "zone_relief", "RULES"]
 
 #: the rules in the order they are tried: name, test on the evidence table
 RULES = (
@@ -150,7 +150,42 @@ def _ring(labels, width=2):
     return ring, grown[ring].astype(np.int64)
 
 
-def object_evidence(labels, n, grey, *, crack_level, noise, skeleton=None, region=None):
+def zone_relief(grey, crack_level, region=None):
+    """Local background of every pixel relative to the rock's, from the crack core grey.
+
+    The local background is a ``ZONE_CLOSING_PX`` grey closing (on the image shrunk by 2,
+    resized back), which fills every crack narrower than that; the rock's is the 75th
+    percentile of that closing inside ``region``. ~1 in a clear grain, low inside a dark
+    phase: ``background_rel`` of :func:`object_evidence` is its median over an object.
+
+    Parameters
+    ----------
+    grey : (M, N) ndarray
+        Flattened, denoised grey image.
+    crack_level : float
+    region : (M, N) ndarray of bool, optional
+
+    Returns
+    -------
+    relief : (M, N) ndarray of float32
+    """
+    import cv2
+    g = np.asarray(grey, np.float32)
+    h, w = g.shape
+    half = cv2.resize(g, (max(w // 2, 1), max(h // 2, 1)), interpolation=cv2.INTER_AREA)
+    k = config.ZONE_CLOSING_PX // 2 | 1
+    bg_half = cv2.morphologyEx(half, cv2.MORPH_CLOSE, cv2.getStructuringElement(
+        cv2.MORPH_ELLIPSE, (k, k)))
+    bg = cv2.resize(bg_half, (w, h), interpolation=cv2.INTER_LINEAR)
+    inside = bg_half if region is None else bg_half[cv2.resize(
+        np.asarray(region, np.uint8), bg_half.shape[::-1],
+        interpolation=cv2.INTER_NEAREST).view(bool)]
+    ref = float(np.percentile(inside, 75)) if inside.size else float(bg.max())
+    return (bg - float(crack_level)) / max(ref - float(crack_level), 1e-3)
+
+
+def object_evidence(labels, n, grey, *, crack_level, noise, skeleton=None, region=None,
+                    relief=None):
     """Shape and surroundings of every object (see the module docstring).
 
     Parameters
@@ -167,6 +202,8 @@ def object_evidence(labels, n, grey, *, crack_level, noise, skeleton=None, regio
     skeleton : (M, N) ndarray of bool, optional
     region : (M, N) ndarray of bool, optional
         Sample region (the rock's background level is read inside it).
+    relief : (M, N) ndarray, optional
+        :func:`zone_relief` of ``grey`` (computed when not given).
 
     Returns
     -------
@@ -198,16 +235,9 @@ def object_evidence(labels, n, grey, *, crack_level, noise, skeleton=None, regio
     width = area / np.maximum(sk, 1.0)
     # the zone around the object: local background and detection density
     h, w = g.shape
-    half = cv2.resize(g, (max(w // 2, 1), max(h // 2, 1)), interpolation=cv2.INTER_AREA)
-    k = config.ZONE_CLOSING_PX // 2 | 1
-    bg_half = cv2.morphologyEx(half, cv2.MORPH_CLOSE, cv2.getStructuringElement(
-        cv2.MORPH_ELLIPSE, (k, k)))
-    bg = cv2.resize(bg_half, (w, h), interpolation=cv2.INTER_LINEAR)
-    inside = bg_half if region is None else bg_half[cv2.resize(
-        np.asarray(region, np.uint8), bg_half.shape[::-1],
-        interpolation=cv2.INTER_NEAREST).view(bool)]
-    ref = float(np.percentile(inside, 75)) if inside.size else float(bg.max())
-    rel_on = (bg[on] - float(crack_level)) / max(ref - float(crack_level), 1e-3)
+    if relief is None:
+        relief = zone_relief(g, crack_level, region)
+    rel_on = relief[on]
     dens = cv2.boxFilter(on.view(np.uint8), cv2.CV_32F, (config.ZONE_WINDOW_PX,) * 2)
     background_rel = _label_percentiles(rel_on, lab_on, n, (50.0,), std=False)[0][0]
     density = _label_percentiles(dens[on], lab_on, n, (50.0,), std=False)[0][0]
@@ -291,3 +321,68 @@ def reject_objects(evidence):
             hit = np.asarray(rule(e), bool) & judged
         why[(why == "") & hit] = name
     return pd.Series(why, index=evidence.index, dtype=object)
+
+
+def split_zone_objects(labels, n, rejected_as, relief, *, level=config.REJECT_MOTTLED_BACKGROUND,
+                       min_px=config.REJECT_MIN_AREA_PX):
+    """Cut the objects rejected as ``dark_phase`` where they leave the dark phase.
+
+    A crack that runs out of a dark grain into clear rock is one object with the grain's rim
+    or cleavage; judged whole, its median zone is dark and all of it is rejected. Its pixels
+    whose zone is clear rock (``relief`` at least ``level``, the level from which the
+    ``mottled`` rule calls a zone clear) are cut off; every 8-connected piece of at least
+    ``min_px`` becomes an object of its own, to be judged again, and the rest stays with the
+    original object and its verdict.
+
+    Parameters
+    ----------
+    labels : (M, N) ndarray of int32
+        Objects 1..n (connected components).
+    n : int
+    rejected_as : sequence of str
+        The rules' verdict per object 1..n (:func:`reject_objects`).
+    relief : (M, N) ndarray
+        :func:`zone_relief`.
+    level, min_px : float, int
+
+    Returns
+    -------
+    None when nothing is cut, else ``(labels, n, origin)``: the new labels 1..n (compact)
+    and, per new label, the old label of an object left unchanged, minus the old label of
+    the rest of a cut object (still in the dark phase: it keeps its verdict), 0 for a
+    piece.
+
+    Examples
+    --------
+    >>> lab = np.zeros((5, 80), np.int32); lab[2, 5:75] = 1
+    >>> relief = np.zeros((5, 80), np.float32); relief[:, 40:] = 1.0
+    >>> new, n, origin = split_zone_objects(lab, 1, ["dark_phase"], relief)
+    >>> n, int((new == 2).sum()), origin.tolist()
+    (2, 35, [0, -1, 0])
+    """
+    import cv2
+
+    from ._kernels import lookup
+    dark = np.zeros(n + 1, bool)
+    dark[1:] = np.asarray(rejected_as, dtype=object) == "dark_phase"
+    if not dark.any():
+        return None
+    clear = lookup(dark, labels) & (np.asarray(relief) >= level)
+    k, piece = cv2.connectedComponents(clear.view(np.uint8), connectivity=8)
+    big = np.bincount(piece.ravel(), minlength=k) >= min_px
+    big[0] = False
+    if not big.any():
+        return None
+    cut = np.zeros(n + 1, bool)
+    cut[np.unique(labels[lookup(big, piece)])] = True
+    new_id = np.zeros(k, np.int32)
+    new_id[big] = n + 1 + np.arange(int(big.sum()), dtype=np.int32)
+    lab = np.where(lookup(big, piece), new_id[piece], labels)
+    # compact ids (an object may be cut into pieces whole)
+    used = np.flatnonzero(np.bincount(lab.ravel(), minlength=n + 1 + int(big.sum())))
+    used = used[used > 0]
+    remap = np.zeros(n + 2 + int(big.sum()), np.int32)
+    remap[used] = np.arange(1, used.size + 1, dtype=np.int32)
+    old = np.where(used <= n, used, 0)
+    origin = np.concatenate([[0], np.where(cut[np.minimum(old, n)], -old, old)])
+    return remap[lab].astype(np.int32, copy=False), int(used.size), origin.astype(np.int64)

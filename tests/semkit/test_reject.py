@@ -153,3 +153,45 @@ def test_phase_edges_are_rejected_and_no_crack_with_them():
     err = max(abs(row["crack_length_um"] / s.cracks.length_px.sum() - 1),
               abs(row["crack_area_um2"] / s.cracks.area_cov_px.sum() - 1))
     assert not row["valid"] or err <= 0.25, (row["valid"], err)
+
+
+def _crack_out_of_a_dark_grain():
+    """A dark grain (75 grey in rock at 180) whose cleavage traces (40 grey) are joined into
+    one object, one of them running on out of the grain as a 160-px crack, and an open crack
+    (25 grey) in clear rock that sets the crack grey."""
+    import cv2
+    rng = np.random.default_rng(3)
+    img = np.full((300, 420), 180.0)
+    cv2.circle(img, (120, 150), 70, 75.0, -1)
+    for dy in (-40, -20, 0, 20, 40):
+        cv2.line(img, (70, 150 + dy), (170, 150 + dy), 40.0, 2)
+    cv2.line(img, (100, 110), (100, 190), 40.0, 2)
+    cv2.line(img, (170, 150), (330, 165), 40.0, 2)
+    cv2.line(img, (250, 40), (390, 70), 25.0, 3)
+    img = cv2.GaussianBlur(img, (0, 0), 0.8) + rng.normal(0, 3, img.shape)
+    return np.clip(img, 0, 255).astype(np.uint8)
+
+
+def test_a_crack_that_leaves_a_dark_grain_is_cut_from_it_and_kept():
+    """Judged whole, the grain's traces and the crack are one ``dark_phase`` object (its median
+    zone is the grain): before the cut none of the crack's stretch in clear rock was counted.
+    Cut, the stretch outside the grain is a crack of its own (about 140 px from the grain's
+    edge at x = 190 to x = 330), and the grain's inside stays rejected."""
+    import cv2
+
+    from semkit.analysis import analyse_image
+    img = _crack_out_of_a_dark_grain()
+    a = analyse_image(img, pixel_size_um=1.0)
+    lab = a.crack_labels
+    outside = np.zeros(img.shape, np.uint8)
+    cv2.line(outside, (215, 154), (325, 165), 1, 3)
+    grain = np.zeros(img.shape, np.uint8)
+    cv2.circle(grain, (120, 150), 60, 1, -1)
+    assert (lab[outside > 0] > 0).mean() >= 0.75
+    assert (lab[grain > 0] > 0).mean() == 0.0
+    rejected = a.rejected
+    assert (rejected["rejected_as"] == "dark_phase").sum() == 1
+    cut = a.cracks.sort_values("x_px").iloc[0]   # the piece nearer the grain
+    assert 110 <= cut["length_px"] <= 160, cut["length_px"]
+    # the open crack (~143 px) is measured as before
+    assert a.summary()["n_cracks"] == 2
