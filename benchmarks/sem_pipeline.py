@@ -4,7 +4,7 @@
 78.6 MP; cracks 2-8 px wide; every other image with a 2.5x illumination gradient; half of each
 size pre-test, half post-test with tensile / shear / mixed cracks) are written as PNG with a
 ``manifest.csv`` (stages ``pre-test`` and ``failure``) and their ground truth. Then
-``semkit.analyse_folder`` runs on the folder (PNG decoding, CSV writing, ``--jobs`` worker
+``semkit.analyse_folder`` runs on the folder (PNG decoding, CSV writing, ``--jobs``
 processes, no overlays), timed on the wall clock:
 
 * ``default`` — the default options: tensile / shear typing on the loaded (post-test) images

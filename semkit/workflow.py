@@ -153,6 +153,52 @@ def _worker_init():
     cv2.setNumThreads(1)
 
 
+def _run_shared(files, jobs, kwargs_of, done):
+    """Analyse ``files`` on ``jobs`` cores: ``jobs - 1`` worker processes and this one.
+
+    Every file is submitted to the pool, largest first (longest-processing-time-first: the
+    last to finish are small, so no core idles long at the end). Between its own images this
+    process takes the next file no worker has taken yet (``Future.cancel`` succeeds only on
+    a call not yet handed to a worker) and analyses it itself: it has semkit imported
+    already, so its core starts at once instead of waiting for one more worker to start
+    (about 0.75 s: imports and numba's first loads). ``done(name, result)`` is called in this
+    thread, in the order results arrive.
+    """
+    import multiprocessing as mp
+
+    import cv2
+    # forkserver: workers start from a clean process, never from a fork of one whose
+    # OpenCV / numba thread pools are running (which can deadlock)
+    ctx = mp.get_context("forkserver" if "forkserver" in mp.get_all_start_methods()
+                         else "spawn")
+    threads = cv2.getNumThreads()
+    cv2.setNumThreads(1)  # the processes are the parallelism, this one included
+    try:
+        with ProcessPoolExecutor(max_workers=jobs - 1, mp_context=ctx,
+                                 initializer=_worker_init) as ex:
+            by_size = sorted(files, key=lambda p: -p.stat().st_size)
+            futs = {ex.submit(analyse_file, p, **kwargs_of(p)): p for p in by_size}
+            waiting = dict(futs)
+
+            def collect(fs):
+                for f in fs:
+                    try:
+                        result = f.result()
+                    except Exception as e:  # noqa: BLE001 (a worker died)
+                        result = _failed_row(futs[f].name, f"worker: {e}", np.nan), None, None
+                    del waiting[f]
+                    done(futs[f].name, result)
+
+            for f, p in futs.items():
+                if f.cancel():
+                    del waiting[f]
+                    done(p.name, analyse_file(p, **kwargs_of(p)))
+                collect([g for g in list(waiting) if g.done()])
+            collect(as_completed(list(waiting)))
+    finally:
+        cv2.setNumThreads(threads)
+
+
 def _preload_plotting():
     """Import matplotlib in a background thread while the workers run: the folder's figures
     (``P_by_stage.png``, grain histograms) need it at the end, when it would add its import time
@@ -259,24 +305,7 @@ def analyse_folder(folder, out, *, jobs=None, progress=True, overlays=True, pixe
             for p in files:
                 done(p.name, analyse_file(p, manifest_row=mrows.get(p.name), **kw))
         else:
-            # forkserver: workers start from a clean process, never from a fork of one whose
-            # OpenCV / numba thread pools are running (which can deadlock)
-            import multiprocessing as mp
-            ctx = mp.get_context("forkserver" if "forkserver" in mp.get_all_start_methods()
-                                 else "spawn")
-            with ProcessPoolExecutor(max_workers=jobs, mp_context=ctx,
-                                     initializer=_worker_init) as ex:
-                # largest files first: the last images to finish are small ones, so no
-                # worker idles long at the end (longest-processing-time-first scheduling)
-                by_size = sorted(files, key=lambda p: -p.stat().st_size)
-                futs = {ex.submit(analyse_file, p, manifest_row=mrows.get(p.name), **kw): p.name
-                        for p in by_size}
-                for f in as_completed(futs):
-                    try:
-                        result = f.result()
-                    except Exception as e:  # noqa: BLE001 (a worker died)
-                        result = _failed_row(futs[f], f"worker: {e}", np.nan), None, None
-                    done(futs[f], result)
+            _run_shared(files, jobs, lambda p: dict(kw, manifest_row=mrows.get(p.name)), done)
     finally:
         if bar:
             bar.close()
