@@ -189,12 +189,16 @@ def _run_shared(files, jobs, kwargs_of, done):
                     del waiting[f]
                     done(futs[f].name, result)
 
-            for f, p in futs.items():
-                if f.cancel():
-                    del waiting[f]
-                    done(p.name, analyse_file(p, **kwargs_of(p)))
-                collect([g for g in list(waiting) if g.done()])
-            collect(as_completed(list(waiting)))
+            try:
+                for f, p in futs.items():
+                    if f.cancel():
+                        del waiting[f]
+                        done(p.name, analyse_file(p, **kwargs_of(p)))
+                    collect([g for g in list(waiting) if g.done()])
+                collect(as_completed(list(waiting)))
+            except BaseException:  # interrupted: no worker starts another image
+                ex.shutdown(wait=False, cancel_futures=True)
+                raise
     finally:
         cv2.setNumThreads(threads)
 
