@@ -75,8 +75,9 @@ def _add_analyse(sub):
                    help="keep row-to-row grey offsets of the raster scan (removed by default "
                         "when they stand above pixel noise)")
     p.add_argument("--area", choices=("midpoint", "mixed"), default=None,
-                   help="crack area: midpoint pixel count, partial volume for thin cracks "
-                        "(default), or mixed: partial volume on every thin stretch")
+                   help="crack area: mixed (default): midpoint count on resolved cross-sections, "
+                        "partial volume on every thin stretch; or midpoint: the pixel count, "
+                        "partial volume only for cracks thinner than 1.6 px")
     p.add_argument("--link", dest="link", action="store_true", default=None,
                    help="join the pieces of faint, beaded cracks along their lines (about "
                         "doubles the CPU time)")

@@ -64,11 +64,11 @@ class AnalysisOptions:
         Find row-to-row grey offsets of a raster scan and remove them when they stand above
         pixel noise (:mod:`semkit.scanlines`); an image without them is left as it is.
     area : str
-        How a crack's area is measured (``auto`` threshold only): ``midpoint`` (default) the
-        pixels past the midpoint between background and void grey, with the partial volume
-        for thin cracks (mean width < ``THIN_WIDTH_PX``); ``mixed`` the midpoint count only
-        on resolved cross-sections and the partial volume on every thin stretch, also inside
-        wide cracks (:func:`semkit.measure.mixed_area`; docs/semkit.md, step 5).
+        How a crack's area is measured (``auto`` threshold only): ``mixed`` (default) the
+        midpoint count only on resolved cross-sections and the partial volume on every thin
+        stretch, also inside wide cracks (:func:`semkit.measure.mixed_area`; docs/semkit.md,
+        step 5); ``midpoint`` the pixels past the midpoint between background and void grey,
+        with the partial volume for thin cracks (mean width < ``THIN_WIDTH_PX``).
     bright_cracks : bool
         Cracks are brighter than the rock (fluorescent-dye impregnated thin sections under
         UV / blue light; some CT): the grey image is inverted before everything else
@@ -95,7 +95,7 @@ class AnalysisOptions:
     reject: bool = True
     segmenter: object = None
     bright_cracks: bool = False
-    area: str = "midpoint"
+    area: str = "mixed"
 
     def __post_init__(self):
         from .classify import load_model

@@ -30,11 +30,13 @@ def _tapered(blur=1.0, noise=3.0, seed=0, shape=(240, 400)):
 
 def test_mixed_area_keeps_the_thin_stretches_of_wide_cracks():
     """A crack that narrows below the blur: its thin stretch never passes the midpoint, so
-    the count (the default: the object's mean width is over 1.6 px) loses most of it; the
-    ``mixed`` estimator measures that stretch by partial volume and the wide one by count."""
+    the count (``--area midpoint``: the object's mean width is over 1.6 px) loses most of it;
+    the ``mixed`` estimator (the default) measures that stretch by partial volume and the
+    wide one by count."""
     img, true_area = _tapered()
-    mid = analyse_image(img, pixel_size_um=1.0, classify=False, flatten="none")
-    mixed = analyse_image(img, pixel_size_um=1.0, classify=False, flatten="none", area="mixed")
+    mid = analyse_image(img, pixel_size_um=1.0, classify=False, flatten="none",
+                        area="midpoint")
+    mixed = analyse_image(img, pixel_size_um=1.0, classify=False, flatten="none")
     assert len(mid.cracks) == 2 and len(mixed.cracks) == 2
     err_mid = mid.cracks.area_px.sum() / true_area - 1
     err_mixed = mixed.cracks.area_px.sum() / true_area - 1
@@ -52,8 +54,9 @@ def test_mixed_area_equals_the_count_on_resolved_cracks():
     img = ndi.gaussian_filter(img.astype(float), 0.8)
     img = np.clip(np.rint(img + np.random.default_rng(1).normal(0, 3, img.shape)), 0, 255)
     img = img.astype(np.uint8)
-    mid = analyse_image(img, pixel_size_um=1.0, classify=False, flatten="none")
-    mixed = analyse_image(img, pixel_size_um=1.0, classify=False, flatten="none", area="mixed")
+    mid = analyse_image(img, pixel_size_um=1.0, classify=False, flatten="none",
+                        area="midpoint")
+    mixed = analyse_image(img, pixel_size_um=1.0, classify=False, flatten="none")
     assert mixed.cracks.area_px.sum() == pytest.approx(mid.cracks.area_px.sum())
     assert mid.cracks.area_px.sum() == pytest.approx(240 * 14, rel=0.03)
 
@@ -64,12 +67,12 @@ def test_area_option_from_the_command_line(tmp_path):
     (tmp_path / "d").mkdir()
     tifffile.imwrite(tmp_path / "d" / "t.tif", img)
     area = {}
-    for flag in ([], ["--area", "mixed"]):
-        out = tmp_path / ("o" + str(len(flag)))
+    for flag in (["--area", "midpoint"], []):
+        out = tmp_path / ("o" + str(len(flag)))  # o2: midpoint, o0: the default
         assert cli.main(["analyse", str(tmp_path / "d"), "--out", str(out), "--no-progress",
                          "--jobs", "1", "--pixel-size-um", "1", *flag]) == 0
         area[len(flag)] = pd.read_csv(out / "images.csv").iloc[0]["crack_area_um2"]
-    assert area[2] > 1.05 * area[0]
+    assert area[0] > 1.05 * area[2]   # the default (mixed) keeps the thin stretches
 
 
 def test_bad_area_option_is_one_clear_error():
