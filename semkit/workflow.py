@@ -161,7 +161,7 @@ def _run_shared(files, jobs, kwargs_of, done):
     process takes the next file no worker has taken yet (``Future.cancel`` succeeds only on
     a call not yet handed to a worker) and analyses it itself: it has semkit imported
     already, so its core starts at once instead of waiting for one more worker to start
-    (about 0.75 s: imports and numba's first loads). ``done(name, result)`` is called in this
+    (about 1 s: imports and numba's first loads). ``done(name, result)`` is called in this
     thread, in the order results arrive.
     """
     import multiprocessing as mp
