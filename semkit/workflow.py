@@ -15,7 +15,7 @@ from __future__ import annotations
 import os
 import pathlib
 import time
-from concurrent.futures import ProcessPoolExecutor, as_completed
+from concurrent.futures import ProcessPoolExecutor
 
 import numpy as np
 import pandas as pd
@@ -156,46 +156,62 @@ def _worker_init():
 def _run_shared(files, jobs, kwargs_of, done):
     """Analyse ``files`` on ``jobs`` cores: ``jobs - 1`` worker processes and this one.
 
-    Every file is submitted to the pool, largest first (longest-processing-time-first: the
-    last to finish are small, so no core idles long at the end). Between its own images this
-    process takes the next file no worker has taken yet (``Future.cancel`` succeeds only on
-    a call not yet handed to a worker) and analyses it itself: it has semkit imported
-    already, so its core starts at once instead of waiting for one more worker to start
-    (about 1 s: imports and numba's first loads). ``done(name, result)`` is called in this
-    thread, in the order results arrive.
+    The files are taken largest first (longest-processing-time-first: the last to finish are
+    small, so no core idles long at the end). The workers are kept two images ahead
+    (``Executor.submit``), and between them this process takes the next file and analyses it
+    itself: it has semkit imported already, so its core starts at once instead of waiting
+    for one more worker to start (about 1 s: imports and numba's first loads). A pool that
+    breaks (a worker killed) fails only the images it held; this process analyses the rest.
+    ``done(name, result)`` is called in this thread, in the order results arrive.
     """
+    import collections
     import multiprocessing as mp
+    from concurrent.futures import FIRST_COMPLETED, wait
+    from concurrent.futures.process import BrokenProcessPool
 
     import cv2
     # forkserver: workers start from a clean process, never from a fork of one whose
     # OpenCV / numba thread pools are running (which can deadlock)
     ctx = mp.get_context("forkserver" if "forkserver" in mp.get_all_start_methods()
                          else "spawn")
+    todo = collections.deque(sorted(files, key=lambda p: -p.stat().st_size))
+    ahead = 2 * (jobs - 1)
+    running = {}
     threads = cv2.getNumThreads()
     cv2.setNumThreads(1)  # the processes are the parallelism, this one included
     try:
         with ProcessPoolExecutor(max_workers=jobs - 1, mp_context=ctx,
                                  initializer=_worker_init) as ex:
-            by_size = sorted(files, key=lambda p: -p.stat().st_size)
-            futs = {ex.submit(analyse_file, p, **kwargs_of(p)): p for p in by_size}
-            waiting = dict(futs)
+            broken = False
+
+            def hand_out():
+                nonlocal broken
+                while todo and not broken and len(running) < ahead:
+                    p = todo.popleft()
+                    try:
+                        running[ex.submit(analyse_file, p, **kwargs_of(p))] = p
+                    except BrokenProcessPool:
+                        todo.appendleft(p)
+                        broken = True
 
             def collect(fs):
                 for f in fs:
+                    p = running.pop(f)
                     try:
                         result = f.result()
                     except Exception as e:  # noqa: BLE001 (a worker died)
-                        result = _failed_row(futs[f].name, f"worker: {e}", np.nan), None, None
-                    del waiting[f]
-                    done(futs[f].name, result)
+                        result = _failed_row(p.name, f"worker: {e}", np.nan), None, None
+                    done(p.name, result)
 
             try:
-                for f, p in futs.items():
-                    if f.cancel():
-                        del waiting[f]
-                        done(p.name, analyse_file(p, **kwargs_of(p)))
-                    collect([g for g in list(waiting) if g.done()])
-                collect(as_completed(list(waiting)))
+                hand_out()
+                while todo:
+                    p = todo.popleft()
+                    done(p.name, analyse_file(p, **kwargs_of(p)))
+                    collect([f for f in list(running) if f.done()])
+                    hand_out()
+                while running:
+                    collect(wait(list(running), return_when=FIRST_COMPLETED).done)
             except BaseException:  # interrupted: no worker starts another image
                 ex.shutdown(wait=False, cancel_futures=True)
                 raise
