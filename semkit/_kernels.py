@@ -703,7 +703,7 @@ def mixed_area_sums(labels, skel, near, area, img, bg, crack_level, resolved, ou
     zero = np.float32(0.0)
     one = np.float32(1.0)
     owner = np.zeros((h, w), np.int32)
-    state = np.zeros((h, w), np.int8)          # 0 unreached, 1 resolved, 2 unresolved
+    state = np.zeros((h, w), np.int8)  # 0 unreached, 1 resolved, 2 unresolved, -1 outside
     n = 0
     for i in range(h):
         for j in range(w):
@@ -740,15 +740,19 @@ def mixed_area_sums(labels, skel, near, area, img, bg, crack_level, resolved, ou
         j = qc[head]
         head += 1
         lab = owner[i, j]
+        st0 = state[i, j]
         for a in range(max(i - 1, 0), min(i + 2, h)):
             for b in range(max(j - 1, 0), min(j + 2, w)):
-                if state[a, b] or not near[a, b]:
+                if state[a, b] != 0:
+                    continue
+                if not near[a, b]:
+                    state[a, b] = -1  # outside: read once, not at every neighbour
                     continue
                 v = labels[a, b]
                 if v != lab and v != 0:
                     continue
                 owner[a, b] = lab
-                state[a, b] = state[i, j]
+                state[a, b] = st0
                 if v == lab:  # rim pixels take a decision but pass none on
                     if tail == cap:
                         cap = 2 * cap + 16
@@ -765,6 +769,8 @@ def mixed_area_sums(labels, skel, near, area, img, bg, crack_level, resolved, ou
         for j in range(w):
             v = labels[i, j]
             st = state[i, j]
+            if st < 0:
+                continue
             lab = owner[i, j]
             if st == 0:
                 if v == 0:
