@@ -190,3 +190,44 @@ def test_bright_cracks_are_read_as_the_same_image_inverted(tmp_path):
                      "--jobs", "1"]) == 0
     row = pd.read_csv(tmp_path / "o" / "images.csv").iloc[0]
     assert row["n_cracks"] == dark["n_cracks"]
+
+
+class _KillsTheWorker:
+    """Unpickled (in a worker, as part of its call) it ends that process abruptly, as an
+    out-of-memory kill would."""
+
+    def __reduce__(self):
+        import os
+        return os._exit, (3,)
+
+
+def test_a_dead_worker_fails_only_the_images_it_held(tmp_path):
+    """``jobs=2``: one worker, kept two images ahead, and this process. The worker dies on the
+    first image it is handed; the two it held are failed rows naming the worker, and this
+    process measures every other image (the run ends: no call is left waiting)."""
+    import threading
+    names = [f"i{k}.png" for k in range(6)]
+    for k, name in enumerate(names):   # largest first: i0, i1 go to the worker
+        s = make_sem_image((220 - 10 * k, 260), n_cracks=3, widths=(3, 6), seed=60 + k)
+        write_image(tmp_path / name, s.image)
+    files = sorted(tmp_path.glob("*.png"))
+    assert sorted(files, key=lambda p: -p.stat().st_size)[0].name == "i0.png"
+    rows = {}
+
+    def kwargs_of(p):
+        kw = dict(pixel_size_um=1.0, options=workflow.AnalysisOptions(classify=False))
+        if p.name == "i0.png":
+            kw["seed"] = _KillsTheWorker()
+        return kw
+
+    run = threading.Thread(target=workflow._run_shared,
+                           args=(files, 2, kwargs_of, lambda n, r: rows.update({n: r})))
+    run.start()
+    run.join(120)
+    assert not run.is_alive(), "the folder loop waits on a call no worker will answer"
+    failed = {n for n, r in rows.items() if isinstance(r[0].get("error"), str)
+              and r[0]["error"]}
+    assert failed == {"i0.png", "i1.png"}, failed
+    assert all(rows[n][0]["error"].startswith("worker: ") for n in failed)
+    assert sorted(rows) == names
+    assert all(rows[n][0]["n_cracks"] > 0 for n in names if n not in failed)
