@@ -8,6 +8,7 @@ CLI and ``gbmgen run`` all go through this one object.
 from __future__ import annotations
 
 import functools
+import typing
 
 import numpy as np
 import pandas as pd
@@ -38,6 +39,18 @@ def _stage_name(stage):
     if stage is None or (isinstance(stage, float) and np.isnan(stage)):
         return None
     return str(stage)
+
+
+class _FirstReading(typing.NamedTuple):
+    """The rejection rules' reading of the objects before :attr:`CrackAnalysis.labels` cuts
+    any: the evidence and verdicts of those objects, per new label where each came from
+    (:func:`semkit.reject.split_zone_objects`; None when nothing was cut) and the zone relief
+    (:func:`semkit.reject.zone_relief`)."""
+
+    evidence: pd.DataFrame
+    rejected_as: pd.Series
+    origin: np.ndarray | None
+    relief: np.ndarray
 
 
 class CrackAnalysis:
@@ -288,8 +301,7 @@ class CrackAnalysis:
         """Objects: the 8-connected components of the cleaned mask, with those rejected as
         ``dark_phase`` cut where they leave the dark phase (:func:`semkit.reject.
         split_zone_objects`; the pieces in clear rock are judged on their own), and the
-        first reading of the evidence (``(evidence, origin, relief)``, None without the
-        rules)."""
+        rules' first reading (:class:`_FirstReading`; None without the rules)."""
         from .measure import label_cracks
         lab, n = label_cracks(self.object_mask)
         if not self.options.reject or n == 0:
@@ -297,11 +309,12 @@ class CrackAnalysis:
         from .reject import reject_objects, split_zone_objects, zone_relief
         relief = zone_relief(self.smooth, self.crack_level, self.region.mask)
         ev = self._object_evidence(lab, n, relief)
-        cut = split_zone_objects(lab, n, reject_objects(ev).to_numpy(), relief)
+        why = reject_objects(ev)
+        cut = split_zone_objects(lab, n, why.to_numpy(), relief)
         if cut is None:
-            return lab, n, (ev, None, relief)
+            return lab, n, _FirstReading(ev, why, None, relief)
         lab, n, origin = cut
-        return lab, n, (ev, origin, relief)
+        return lab, n, _FirstReading(ev, why, origin, relief)
 
     @property
     def labels(self):
@@ -382,13 +395,13 @@ class CrackAnalysis:
         Objects that :attr:`labels` left as they were keep their first reading (cut pieces
         next to them would otherwise count as neighbours of theirs)."""
         labels, n, first = self._labels
-        if first is not None and first[1] is None:
-            return first[0]
-        ev = self._object_evidence(labels, n, first[2] if first is not None else None)
+        if first is not None and first.origin is None:
+            return first.evidence
+        ev = self._object_evidence(labels, n, None if first is None else first.relief)
         if first is not None:
-            origin = first[1][1:]
+            origin = first.origin[1:]
             keep = origin > 0
-            ev.iloc[np.flatnonzero(keep)] = first[0].loc[origin[keep]].to_numpy()
+            ev.iloc[np.flatnonzero(keep)] = first.evidence.loc[origin[keep]].to_numpy()
         return ev
 
     @functools.cached_property
@@ -397,11 +410,12 @@ class CrackAnalysis:
         of an object cut by :attr:`labels` keeps the verdict of the whole)."""
         if not self.options.reject or self.n_objects == 0:
             return pd.Series("", index=np.arange(1, self.n_objects + 1), dtype=object)
+        first = self._labels[2]
+        if first.origin is None:
+            return first.rejected_as
         from .reject import reject_objects
         why = reject_objects(self.evidence)
-        first = self._labels[2]
-        if first is not None and first[1] is not None:
-            why[first[1][1:] < 0] = "dark_phase"
+        why[first.origin[1:] < 0] = "dark_phase"
         return why
 
     @functools.cached_property
