@@ -158,11 +158,12 @@ def _run_shared(files, jobs, kwargs_of, done):
 
     The files are taken largest first (longest-processing-time-first: the last to finish are
     small, so no core idles long at the end). The workers are kept two images ahead
-    (``Executor.submit``), and between them this process takes the next file and analyses it
-    itself: it has semkit imported already, so its core starts at once instead of waiting
-    for one more worker to start (about 1 s: imports and numba's first loads). A pool that
-    breaks (a worker killed) fails only the images it held; this process analyses the rest.
-    ``done(name, result)`` is called in this thread, in the order results arrive.
+    (``Executor.submit``), never with the last file left, and between them this process
+    takes the next file and analyses it itself: it has semkit imported already, so its core
+    starts at once instead of waiting for one more worker to start (about 1 s: imports and
+    numba's first loads). A pool that breaks (a worker killed) fails only the images it held;
+    this process analyses the rest. ``done(name, result)`` is called in this thread, in the
+    order results arrive.
     """
     import collections
     import multiprocessing as mp
@@ -186,7 +187,8 @@ def _run_shared(files, jobs, kwargs_of, done):
 
             def hand_out():
                 nonlocal broken
-                while todo and not broken and len(running) < ahead:
+                # the last file is left to this process (two files: one each)
+                while len(todo) > 1 and not broken and len(running) < ahead:
                     p = todo.popleft()
                     try:
                         running[ex.submit(analyse_file, p, **kwargs_of(p))] = p
