@@ -364,9 +364,9 @@ def label_moments(labels, n_labels, out):
     labels : (H, W) int32
     n_labels : int
         Highest label + 1.
-    out : (n_labels, 8) float64, zeroed by the caller
-        Columns: count, sum x, sum y, sum x², sum y², sum xy, then row min and row max
-        are not kept (columns 6-7 hold the bounding-box width and height after the call).
+    out : (n_labels, 10) float64, zeroed by the caller
+        Columns: count, sum x, sum y, sum x², sum y², sum xy, the bounding box's width and
+        height, and its first column and row (labels without pixels keep zeros there).
     """
     h, w = labels.shape
     bb = np.empty((n_labels, 4), np.int64)  # xmin, xmax, ymin, ymax
@@ -398,6 +398,8 @@ def label_moments(labels, n_labels, out):
         if bb[k, 1] >= 0:
             out[k, 6] = bb[k, 1] - bb[k, 0] + 1
             out[k, 7] = bb[k, 3] - bb[k, 2] + 1
+            out[k, 8] = bb[k, 0]
+            out[k, 9] = bb[k, 2]
 
 
 @njit

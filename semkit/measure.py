@@ -42,16 +42,18 @@ def label_cracks(mask):
     return lab.astype(np.int32, copy=False), int(n - 1)
 
 
-def object_moments(labels, n):
+def object_moments(labels, n, *, origin=False):
     """Per-object pixel count, centroid, second central moments and bounding box.
 
     Returns
     -------
     area, cx, cy, mxx, myy, mxy, bbox_w, bbox_h : (n + 1,) ndarray of float64
         Entry 0 is the background. Moments are in px² and include the 1/12 of a pixel.
+    bbox_x0, bbox_y0 : (n + 1,) ndarray of float64
+        Only with ``origin=True``: the bounding box's first column and row.
     """
     from . import _kernels
-    m = np.zeros((n + 1, 8), np.float64)
+    m = np.zeros((n + 1, 10), np.float64)
     _kernels.label_moments(np.ascontiguousarray(labels, np.int32), n + 1, m)
     area = m[:, 0]
     a = np.maximum(area, 1)
@@ -60,6 +62,8 @@ def object_moments(labels, n):
     mxx = m[:, 3] / a - cx ** 2 + 1 / 12
     myy = m[:, 4] / a - cy ** 2 + 1 / 12
     mxy = m[:, 5] / a - cx * cy
+    if origin:
+        return area, cx, cy, mxx, myy, mxy, m[:, 6], m[:, 7], m[:, 8], m[:, 9]
     return area, cx, cy, mxx, myy, mxy, m[:, 6], m[:, 7]
 
 

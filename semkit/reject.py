@@ -224,7 +224,7 @@ def object_evidence(labels, n, grey, *, crack_level, noise, skeleton=None, regio
     (ring_lo, ring_hi), ring_sd = _label_percentiles(g[ring], ring_lab, n, (25.0, 75.0))
     side_depth = (ring_lo - core) / np.maximum(ring_lo - float(crack_level), 1e-3)
     side_step = (ring_hi - ring_lo) / np.maximum(ring_lo - float(crack_level), 1e-3)
-    area, cx, cy, mxx, myy, mxy, _, _ = object_moments(lab, n)
+    area, cx, cy, mxx, myy, mxy, bw, bh, bx, by = object_moments(lab, n, origin=True)
     half = 0.5 * (mxx + myy)
     disc = np.sqrt(0.25 * (mxx - myy) ** 2 + mxy ** 2)
     elong = np.sqrt(np.maximum(half + disc, 1e-9) / np.maximum(half - disc, 1e-2))
@@ -264,22 +264,20 @@ def object_evidence(labels, n, grey, *, crack_level, noise, skeleton=None, regio
     loop = (encloses >= config.REJECT_RIM_LOOP_PX) & (hole_lift >= config.REJECT_RIM_HOLE_LIFT)
     if loop.any():
         # share of the object that hugs a hole: within its own width (+1.5 px) of one (only
-        # for objects closing a bright loop, the ones the grain-rim rule judges)
-        # the distance is read only where it can pass the test: within the widest loop
-        # object's reach of the loop objects (a chamfer path of k steps is >= 0.955 k long,
-        # so a box that much wider holds every path that short: same distances as the whole
-        # image's)
-        reach = float(np.max(width[loop])) + 1.5
-        m = int(np.ceil(reach / 0.955)) + 2
-        rows, cols = np.nonzero(np.any(loop[lab], axis=1)), np.nonzero(np.any(loop[lab], axis=0))
-        r0, r1 = max(int(rows[0][0]) - m, 0), min(int(rows[0][-1]) + m + 1, h)
-        c0, c1 = max(int(cols[0][0]) - m, 0), min(int(cols[0][-1]) + m + 1, w)
-        d = np.full((h, w), np.inf, np.float32)
-        d[r0:r1, c0:c1] = cv2.distanceTransform(
-            np.ascontiguousarray(~holes[r0:r1, c0:c1]).view(np.uint8), cv2.DIST_L2, 3)
-        hug = d[on] <= width[lab_on] + 1.5
-        rim_share = np.where(loop, np.bincount(lab_on, weights=hug, minlength=n + 1)[:n + 1]
-                             / np.maximum(area, 1.0), np.nan)
+        # for objects closing a bright loop, the ones the grain-rim rule judges). The
+        # distance is read in the object's box widened by its reach: a chamfer path of k
+        # steps is >= 0.955 k long, so that box holds every path short enough to pass (the
+        # same verdicts as distances over the whole image)
+        hugging = np.zeros(n + 1)
+        for k in np.flatnonzero(loop):
+            reach = width[k] + 1.5
+            m = int(np.ceil(reach / 0.955)) + 2
+            r0, c0 = max(int(by[k]) - m, 0), max(int(bx[k]) - m, 0)
+            r1, c1 = min(int(by[k] + bh[k]) + m, h), min(int(bx[k] + bw[k]) + m, w)
+            d = cv2.distanceTransform(
+                np.ascontiguousarray(~holes[r0:r1, c0:c1]).view(np.uint8), cv2.DIST_L2, 3)
+            hugging[k] = np.count_nonzero(d[lab[r0:r1, c0:c1] == k] <= reach)
+        rim_share = np.where(loop, hugging / np.maximum(area, 1.0), np.nan)
     # other objects (>= 5 px) whose centre lies in the window around this one's centre
     big = np.flatnonzero(area[1:] >= 5) + 1
     ri = np.clip(np.rint(cy[big]).astype(int), 0, lab.shape[0] - 1)

@@ -528,7 +528,7 @@ def _check_dark_class(img, mask, frac, lv):
     if frac > config.MAX_DARK_FRACTION:
         return False, f"dark class holds {frac:.0%} of the image: a mineral phase, not cracks?"
     if mask.any():
-        inside = float(np.median(img[mask]))
+        inside = float(median(img[mask]))  # a copy: reordered in place
         if inside > lv.mineral - 2.0 * lv.sigma:
             return False, "dark class is not darker than the darkest mineral"
     return True, ""

@@ -127,6 +127,53 @@ def test_rim_share_tells_a_ring_from_a_network_that_closes_one_loop():
         assert (reject_objects(ev).iloc[0] == "grain_rim") == (mask is ring)
 
 
+def test_rim_share_read_in_each_objects_box_equals_the_whole_images_distances():
+    """The hugging share is read in each loop object's box widened by its reach; it is the
+    share a distance over the whole image gives, for rings of different widths side by side,
+    one of them touching the image edge."""
+    import cv2
+    import numpy as np
+
+    from semkit.reject import object_evidence
+    rng = np.random.default_rng(4)
+    grey = rng.normal(120.0, 2.0, (160, 260)).astype(np.float32)
+    lab = np.zeros(grey.shape, np.int32)
+    for k, (cx, cy, r, t) in enumerate(((40, 60, 25, 2), (105, 70, 30, 6), (200, 31, 28, 4),
+                                        (200, 110, 22, 9)), start=1):
+        disc = np.zeros(grey.shape, np.uint8)
+        cv2.circle(disc, (cx, cy), r - t, 1, -1)
+        grey[disc > 0] = 190.0
+        ring = np.zeros(grey.shape, np.uint8)
+        cv2.circle(ring, (cx, cy), r, 1, t)
+        lab[(ring > 0) & (lab == 0)] = k
+    lab[150:153, 10:250][lab[150:153, 10:250] == 0] = 5     # a crack that closes no loop
+    # a ring whose wide tail runs along a thin ring's hole, outside its own box: hugging it
+    # needs the box widened by the reach
+    grey = np.pad(grey, ((0, 80), (0, 0)), constant_values=120.0)
+    lab = np.pad(lab, ((0, 80), (0, 0)))
+    for k, (cx, cy, r, t) in ((6, (40, 181, 12, 3)), (7, (140, 209, 8, 1))):
+        disc = np.zeros(grey.shape, np.uint8)
+        cv2.circle(disc, (cx, cy), r - t, 1, -1)
+        grey[disc > 0] = 190.0
+        ring = np.zeros(grey.shape, np.uint8)
+        cv2.circle(ring, (cx, cy), r, 1, t)
+        lab[(ring > 0) & (lab == 0)] = k
+    lab[192:201, 50:200] = 6
+    grey[lab > 0] = 80.0
+    ev = object_evidence(lab, 7, grey, crack_level=30.0, noise=2.0)
+    on = lab > 0
+    back = np.pad((~on).astype(np.uint8), 1, constant_values=1)
+    cv2.floodFill(back, None, (0, 0), 2)
+    holes = back[1:-1, 1:-1] == 1
+    d = cv2.distanceTransform((~holes).astype(np.uint8), cv2.DIST_L2, 3)
+    loop = ev.rim_share.notna().to_numpy()
+    assert loop[:4].all() and not loop[4] and loop[5:].all()
+    for k in (1, 2, 3, 4, 6, 7):
+        own = lab == k
+        want = np.count_nonzero(d[own] <= ev.width_px[k] + 1.5) / own.sum()
+        assert ev.rim_share[k] == want, k
+
+
 def test_phase_edges_are_rejected_and_no_crack_with_them():
     """Small grains (30 px) whose boundaries are darkened by 12 %: short, shallow segments
     on the step between a dark and a bright grain passed for cracks (a valid image read
