@@ -76,6 +76,13 @@ THIN_ONLY_CRACK_RATIO = 0.3
 #: volume, not the void grey (read as the crack grey, it inflated the areas of the hairline
 #: images of benchmarks/line_family.py by 6-285 %, median 63 %).
 MIN_FLAT_CORE_PX = 10
+#: when the dark class shows no plateau, the void grey is read on the detected objects' pixels
+#: at least this far (px) from their edge (the cores of cracks >= 5 px wide)
+DETECTED_CORE_PX = 2.5
+#: ... and one object must hold at least this many flat core pixels: a plateau. Where blurred
+#: 3-px lines cross (benchmarks/line_family.py hairlines) the flat spot holds <= 28 px of partial
+#: volume; the cracks >= 4.6 px wide of development images 9, 15, 18 hold 70-282 px
+DETECTED_PLATEAU_MIN_PX = 50
 #: components of the dark class whose plateau (median of at least VOID_PLATEAU_MIN_PX flat-core
 #: pixels) lies more than VOID_PLATEAU_BAND noise sigmas, and VOID_PLATEAU_CONTRAST of the
 #: mineral-to-void contrast, above the darkest open (non-pore) plateau are a dark phase's laths:

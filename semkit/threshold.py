@@ -324,6 +324,37 @@ def _void_components(dark, flat, flat_at, noise, mineral, step=1):
     return keep[lab], float(cnt[big[above]].sum()) / max(len(flat), 1)
 
 
+def _detected_void(image, mask, noise, mineral):
+    """Void grey read on the flat cores of the objects of ``mask``, or NaN when they have none.
+
+    For an image whose dark class shows no plateau (:func:`dark_class_levels`, ``resolved``
+    False): cracks as dark as a dark mineral lie above the dark class, yet the threshold finds
+    them by their depth below the local background. ``mask`` is the midpoint mask on the darker
+    guess of the crack grey (a blurred line's detect mask is wide, its midpoint mask is not).
+    Its pixels at least ``DETECTED_CORE_PX`` from its edge (the cores of cracks >= 5 px wide) in
+    a flat 3 x 3 neighbourhood (:func:`_flat_core_values`) are the candidates; one object must
+    hold at least ``DETECTED_PLATEAU_MIN_PX`` of them (where blurred lines cross, the flat spot
+    is a partial volume of a few tens of px); pores and brighter plateaus (a dark phase) are
+    left out by :func:`_void_components`, and the void grey is the median of the rest.
+    """
+    import cv2
+    mask = np.ascontiguousarray(mask).view(np.uint8)
+    interior = cv2.distanceTransform(mask, cv2.DIST_L2, 5) >= config.DETECTED_CORE_PX
+    core = image[interior]
+    if core.size < config.DETECTED_PLATEAU_MIN_PX:
+        return float("nan")
+    flat, flat_at = _flat_core_values(image, interior, 1, max(
+        config.FLAT_CORE_SIGMAS * noise,
+        config.FLAT_CORE_CONTRAST * (mineral - float(median(core)))))
+    if flat.size < config.DETECTED_PLATEAU_MIN_PX:
+        return float("nan")
+    _, comp = cv2.connectedComponents(mask, connectivity=8)
+    if np.bincount(comp.ravel()[flat_at]).max() < config.DETECTED_PLATEAU_MIN_PX:
+        return float("nan")   # the flat spots of line crossings, no plateau
+    void, _ = _void_components(mask, flat, flat_at, noise, mineral)
+    return float(np.median(flat if void is None else flat[void]))
+
+
 def line_crack_level(image, mineral, noise, *, closed=None):
     """Crack grey read on narrow dark lines in the rock, and the share of the image they hold.
 
@@ -483,13 +514,6 @@ def threshold_auto(image, *, area_fraction=config.AUTO_AREA_FRACTION,
     area = np.zeros(img.shape, bool)
     seed = np.zeros(img.shape, bool)
     detect = np.zeros(img.shape, bool)
-    # areas are measured against the void grey: the plateaus of resolved cracks (the cores
-    # of partly resolved ones pull the dark class's median up, and a midpoint on it reads
-    # every counted crack wide)
-    void = lv.crack
-    if lv.resolved and np.isfinite(lv.flat_crack) and lv.flat_crack < lv.crack:
-        void = lv.flat_crack
-    area.ravel()[idx] = depth > area_fraction * np.maximum(b - void, 1e-3)
     # the depth tests count noise as the smoothed image carries it: correlated over a few
     # pixels, so a speck-sized dip is ~1.3-1.6 x deeper than the pixel-to-pixel sigma says
     sd = max(field_noise_sigma(img), sn)
@@ -502,11 +526,33 @@ def threshold_auto(image, *, area_fraction=config.AUTO_AREA_FRACTION,
     keep[lab[seed]] = True
     keep[0] = False
     detect = _kernels.lookup(keep, lab)
+    # areas are measured against the void grey: the plateaus of resolved cracks (the cores
+    # of partly resolved ones pull the dark class's median up, and a midpoint on it reads
+    # every counted crack wide); when the dark class shows no plateau, those of the
+    # detected objects (cracks as dark as a dark mineral lie above the dark class)
+    void = lv.crack
+    detected_void = float("nan")
+    if lv.resolved and np.isfinite(lv.flat_crack) and lv.flat_crack < lv.crack:
+        void = lv.flat_crack
+    area.ravel()[idx] = depth > area_fraction * np.maximum(b - void, 1e-3)
     area &= detect
+    if not lv.resolved:
+        # the cores are read inside the midpoint mask on the darker guess: a blurred line's
+        # detect mask is wide, its midpoint mask is not
+        detected_void = _detected_void(img, area, sn, lv.mineral)
+        if np.isfinite(detected_void):
+            void = detected_void
+            area.ravel()[idx] = depth > area_fraction * np.maximum(b - void, 1e-3)
+            area &= detect
     frac = float(area.mean())
     value = 0.5 * (lv.mineral + lv.crack)
     ok, note = _check_dark_class(img, area, frac, lv)
-    if not lv.resolved:
+    if not lv.resolved and np.isfinite(detected_void):
+        note0 = "; ".join(t for t in (note0, (
+            f"no crack shows its core grey below the darkest mineral: the void grey is read "
+            f"as {detected_void:.4g} on the flat cores of the widest detected objects, and "
+            "areas scale with the contrast to it")) if t)
+    elif not lv.resolved:
         note0 = "; ".join(t for t in (note0, (
             f"no crack shows its core grey (all are narrower than the blur): the crack grey "
             f"is taken as {lv.crack:.4g}, at most {config.THIN_ONLY_CRACK_RATIO:g} x the darkest "

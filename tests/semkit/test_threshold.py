@@ -162,6 +162,31 @@ def test_too_few_lines_to_read_give_no_crack_but_a_flag(monkeypatch):
     assert r.ok and r.note == "no dark class" and not r.mask.any()
 
 
+@pytest.mark.parametrize("seed", [1, 3, 4])
+def test_cracks_as_dark_as_a_dark_mineral_read_their_void_on_their_own_plateaus(seed):
+    """Cracks (grey ~30) in rock with a dark mineral at 46: the dark class below the mineral
+    shows no plateau, and the crack grey was assumed at 0.3 x the darkest mineral, 14-21
+    greys below the cores of the 8-px cracks, so every partial-volume area read low (area
+    -35 to -56 %). The void grey is now read on the flat cores of the widest detected cracks:
+    within 10 % of the contrast of the true cores' grey, and said so."""
+    import cv2
+
+    from semkit.analysis import analyse_image
+    minerals = (("m0", 118.0, 0.22), ("m1", 104.0, 0.27), ("m2", 122.0, 0.44),
+                ("m3", 78.0, 0.31), ("dark", 46.0, 0.11))
+    s = make_sem_image((512, 640), stage="post", seed=seed, minerals=minerals,
+                       widths=(1.8, 8.5), noise_sigma=7.0, blur_sigma=1.2, mean_grain_px=140,
+                       boundary_depth=0.07)
+    a = analyse_image(s.image, pixel_size_um=1.0, stage="failure", classify=False)
+    lv = dark_class_levels(a.smooth)
+    assert not lv.resolved
+    core = cv2.erode(s.crack_mask.astype(np.uint8), np.ones((5, 5), np.uint8)) > 0
+    truth = float(np.median(a.smooth[core]))
+    th = a.thresholded
+    assert abs(th.void_level - truth) < 0.1 * (lv.mineral - truth), (th.void_level, truth)
+    assert "void grey is read as" in th.note
+
+
 @pytest.mark.parametrize("width,blur", [(1.5, 1.0), (2.0, 1.4), (3.0, 1.0)])
 def test_hairline_only_image_reads_no_partial_volume_as_the_crack_grey(width, blur):
     """Every crack 1.5-3 px wide and blurred: the darkest grey across each is a partial volume
