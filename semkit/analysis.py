@@ -616,8 +616,11 @@ class CrackAnalysis:
         share, by_rule = self._zone_rejected_share()
         if share >= config.REJECT_MAX_ZONE_SHARE:
             rules = ", ".join(f"{k} {v:.0%}" for k, v in by_rule.items())
-            notes.append(f"rejection: {share:.0%} of the dark area was rejected by the zone and "
-                         f"shape rules ({rules}); the figures depend on them: check the overlay")
+            kept = "; lone_line: kept, a lone line in a dark zone" if "lone_line" in by_rule \
+                else ""
+            notes.append(f"rejection: {share:.0%} of the dark area was judged by the zone and "
+                         f"shape rules ({rules}{kept}); the figures depend on them: check the "
+                         "overlay")
         return dict(valid=not notes, valid_note="; ".join(notes))
 
     def _saturated_share(self):
@@ -686,14 +689,23 @@ class CrackAnalysis:
 
     def _zone_rejected_share(self):
         """Share of the dark objects' area (pores aside) that the zone and shape rules
-        rejected, in all and per rule (``phase_rim``, a boundary segment, is not counted)."""
+        decided: rejected, in all and per rule (``phase_rim``, a boundary segment, is not
+        counted), and kept only as lone lines in a dark zone (``lone_line``,
+        :func:`semkit.reject.kept_lone_lines`): either way the figures rest on the rules."""
         o = self._classified_objects
         o = o[~o["is_pore"].to_numpy(bool)] if self.options.exclude_pores else o
         total = float(o["area_px"].sum())
-        zone = o[~o["rejected_as"].isin(["", "phase_rim", "phase_edge"])]
-        if total <= 0 or zone.empty:
+        if total <= 0 or not self.options.reject:
             return 0.0, {}
-        by_rule = (zone.groupby("rejected_as")["area_px"].sum() / total).to_dict()
+        from .reject import kept_lone_lines
+        lone = kept_lone_lines(self.evidence, self.rejected_as)
+        lone_ids = lone.index[lone.to_numpy(bool)]
+        is_lone = o["crack_id"].isin(lone_ids).to_numpy()
+        why = o["rejected_as"].where(~is_lone, "lone_line")
+        zone = o[~why.isin(["", "phase_rim", "phase_edge"]).to_numpy()]
+        if zone.empty:
+            return 0.0, {}
+        by_rule = (zone.groupby(why[zone.index])["area_px"].sum() / total).to_dict()
         return float(zone["area_px"].sum()) / total, by_rule
 
 

@@ -373,6 +373,13 @@ REJECT_COMPACT_WIDTH_PX = 6.0
 #: dark phase: the object's local background is below this share of the rock's (both from
 #: the crack core grey)
 REJECT_DARK_BACKGROUND = 0.4
+#: ... except a lone line: at most this many other objects in its window (``neighbours``), at
+#: least this elongated, and its core at least this share of the contrast below its darker
+#: side (development images 10 and 12: 20 of 26 rejected objects were cracks in darker
+#: minerals, each alone in its window; the granite's dark-grain objects have 2-17 around them)
+LONE_LINE_MAX_NEIGHBOURS = 1
+LONE_LINE_ELONGATION = 5.0
+LONE_LINE_DEPTH = 0.4
 #: mottled, altered area: local background below this share, and at least this share of the
 #: window around the object detected
 REJECT_MOTTLED_BACKGROUND = 0.8

@@ -53,7 +53,26 @@ import pandas as pd
 
 from . import config
 
-__all__ = ["object_evidence", "reject_objects", "split_zone_objects", "zone_relief", "RULES"]
+__all__ = ["object_evidence", "reject_objects", "split_zone_objects", "zone_relief",
+           "kept_lone_lines", "RULES"]
+
+def _lone_line(e):
+    """A straight line with no other object around it, deep for its zone: a crack in a dark
+    grain, not the grain's cleavage, boundaries or texture (which come many together)."""
+    return ((e.neighbours <= config.LONE_LINE_MAX_NEIGHBOURS)
+            & (e.elongation >= config.LONE_LINE_ELONGATION)
+            & (e.side_depth >= config.LONE_LINE_DEPTH))
+
+
+def kept_lone_lines(evidence, rejected_as):
+    """Which objects are kept only as lone lines (:func:`_lone_line`): the dark-phase rule's
+    zone test holds for them, and no rule rejected them (a boolean Series like
+    ``rejected_as``)."""
+    e = evidence
+    zone = (e.background_rel < config.REJECT_DARK_BACKGROUND) \
+        & (e.side_depth < config.REJECT_ZONE_MAX_DEPTH)
+    return zone & _lone_line(e) & (np.asarray(rejected_as) == "")
+
 
 #: the rules in the order they are tried: name, test on the evidence table
 RULES = (
@@ -72,12 +91,14 @@ RULES = (
      & (e.width_px >= config.REJECT_COMPACT_WIDTH_PX)
      & (e.side_depth < config.REJECT_ZONE_MAX_DEPTH)),
     ("dark_phase", lambda e: (e.background_rel < config.REJECT_DARK_BACKGROUND)
-     & (e.side_depth < config.REJECT_ZONE_MAX_DEPTH)),
+     & (e.side_depth < config.REJECT_ZONE_MAX_DEPTH) & ~_lone_line(e)),
     ("mottled", lambda e: (e.background_rel < config.REJECT_MOTTLED_BACKGROUND)
      & (e.density >= config.REJECT_MOTTLED_DENSITY)
      & (e.neighbours >= config.REJECT_MOTTLED_NEIGHBOURS)
      & (e.side_depth < config.REJECT_ZONE_MAX_DEPTH)),
 )
+
+
 #: the size (px) from which a rule judges an object: REJECT_MIN_AREA_PX, except where the
 #: rule's evidence holds on smaller objects
 RULE_MIN_AREA_PX = {"phase_edge": config.REJECT_EDGE_MIN_AREA_PX}
