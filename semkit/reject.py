@@ -40,7 +40,9 @@ Every cleaned object gets a few measures (:func:`object_evidence`):
 
 An object whose dark core reaches the crack core grey (``side_depth`` at least
 ``REJECT_ZONE_MAX_DEPTH``: an open, void- or epoxy-filled crack) is never rejected for its
-zone: a crack through a dark or mottled grain stays a crack.
+zone: a crack through a dark or mottled grain stays a crack. Nor is a lone line
+(:func:`kept_lone_lines`: straight, deep for its zone, no other object around it) rejected as
+``dark_phase``: a crack in a darker mineral, not the grain's texture.
 
 :func:`reject_objects` applies the rules (:data:`RULES`, thresholds in :mod:`semkit.config`)
 and returns the reason per object (``""`` for a crack). Rejected objects stay in
@@ -55,6 +57,7 @@ from . import config
 
 __all__ = ["object_evidence", "reject_objects", "split_zone_objects", "zone_relief",
            "kept_lone_lines", "RULES"]
+
 
 def _lone_line(e):
     """A straight line with no other object around it, deep for its zone: a crack in a dark
@@ -97,8 +100,6 @@ RULES = (
      & (e.neighbours >= config.REJECT_MOTTLED_NEIGHBOURS)
      & (e.side_depth < config.REJECT_ZONE_MAX_DEPTH)),
 )
-
-
 #: the size (px) from which a rule judges an object: REJECT_MIN_AREA_PX, except where the
 #: rule's evidence holds on smaller objects
 RULE_MIN_AREA_PX = {"phase_edge": config.REJECT_EDGE_MIN_AREA_PX}
