@@ -232,16 +232,23 @@ def dark_class_levels(image) -> DarkLevels:
         dark = (sub < seed).view(np.uint8)
         interior = cv2.erode(dark, np.ones((3, 3), np.uint8)).view(bool)
         core = sub[interior]
-        flat, flat_at = _flat_core_values(
-            a, interior, step, max(config.FLAT_CORE_SIGMAS * sn, config.FLAT_CORE_CONTRAST
-                                   * (mineral - float(np.median(core))))) \
+        max_range = max(config.FLAT_CORE_SIGMAS * sn, config.FLAT_CORE_CONTRAST
+                        * (mineral - float(np.median(core)))) if core.size >= 20 else 0.0
+        flat, flat_at = _flat_core_values(a, interior, step, max_range) \
             if core.size >= 20 else (np.zeros(0, np.float32), np.zeros(0, np.int64))
         resolved = flat.size >= config.MIN_FLAT_CORE_PX
-        if resolved:
-            crack = float(np.median(core))
+        full = _full_resolution_plateaus(a, seed, sn, mineral, max_range) if step > 2 else None
+        vstep, comps = step, None
+        if full is not None:  # the void is read on them
+            dark, flat, flat_at, comps = full
+            vstep = 1
+        if resolved or full is not None:
+            crack = float(np.median(core)) if core.size >= 20 else float(np.median(flat))
+            resolved = True
             # the void grey leaves out plateaus at a brighter grey (laths of a dark mineral);
             # detection keeps the dark class's median (its levels were set on it)
-            void, phase_share = _void_components(dark, flat, flat_at, sn, mineral, step)
+            void, phase_share = _void_components(dark, flat, flat_at, sn, mineral, vstep,
+                                                 components=comps)
             flat_crack = float(np.median(flat if void is None else flat[void]))
         else:  # all cracks thin: their darkest values are partial volumes; the core is
             # assumed at least as dark as 30 % of the darkest mineral (epoxy / void in BSE)
@@ -250,6 +257,40 @@ def dark_class_levels(image) -> DarkLevels:
                         config.THIN_ONLY_CRACK_RATIO * mineral)
     return DarkLevels(mineral, float(sigma), crack, float(seed), n_dark, sn, resolved=resolved,
                       flat_crack=flat_crack, phase_share=phase_share)
+
+
+def _full_resolution_plateaus(image, seed, noise, mineral, max_range):
+    """The dark class's plateaus read at full resolution, or None when no crack holds one.
+
+    :func:`dark_class_levels` reads the dark class on the image subsampled by ``step``, where
+    a plateau needs 3 x ``step`` px of width: 6 px up to 1.2 MP, 12 px on a 3-MP image (8-px
+    cracks showed none, and a dark grain's plateau was taken for the void). Used from step 3
+    on, so the width stays that of step 2: the interior is the dark class eroded by 7 x 7 at
+    full resolution (cracks >= 7 px wide), its flat pixels
+    (:func:`_flat_core_values`, ``max_range`` as there, or ``FLAT_CORE_SIGMAS`` noise sigmas
+    when 0), and one 8-connected component of the dark class must hold at least
+    ``DETECTED_PLATEAU_MIN_PX`` of them (where blurred 3-px lines cross the dark class is that
+    wide over a few tens of px of partial volume).
+
+    Returns
+    -------
+    (dark, flat, flat_at, components) or None
+        The full-resolution dark mask (uint8), the flat pixels' grey and raveled indices, and
+        ``cv2.connectedComponents(dark, connectivity=8)``.
+    """
+    import cv2
+    dark = (image < np.float32(seed)).view(np.uint8)
+    interior = cv2.erode(dark, np.ones((7, 7), np.uint8)).view(bool)
+    if np.count_nonzero(interior) < config.DETECTED_PLATEAU_MIN_PX:
+        return None
+    flat, flat_at = _flat_core_values(image, interior, 1,
+                                      max_range or config.FLAT_CORE_SIGMAS * noise)
+    if flat.size < config.DETECTED_PLATEAU_MIN_PX:
+        return None
+    comps = cv2.connectedComponents(dark, connectivity=8)
+    if np.bincount(comps[1].ravel()[flat_at]).max() < config.DETECTED_PLATEAU_MIN_PX:
+        return None
+    return dark, flat, flat_at, comps
 
 
 def _flat_core_values(image, interior, step, max_range):
@@ -274,7 +315,7 @@ def _flat_core_values(image, interior, step, max_range):
     return image[rr, cc][flat], at
 
 
-def _void_components(dark, flat, flat_at, noise, mineral, step=1):
+def _void_components(dark, flat, flat_at, noise, mineral, step=1, components=None):
     """Which flat-core pixels of the dark class hold the void of the open cracks.
 
     Pores (compact, full components of ``dark``, :func:`semkit.measure.is_pore` at the full
@@ -287,6 +328,9 @@ def _void_components(dark, flat, flat_at, noise, mineral, step=1):
     mineral-to-void contrast, whichever is larger) are a dark phase (laths of a dark mineral),
     not open cracks.
 
+    ``components`` may pass ``cv2.connectedComponents(dark, connectivity=8)`` when the caller
+    has it already.
+
     Returns
     -------
     keep : (len(flat),) ndarray of bool or None
@@ -297,7 +341,8 @@ def _void_components(dark, flat, flat_at, noise, mineral, step=1):
     import cv2
 
     from .measure import is_pore, object_moments
-    n, comp = cv2.connectedComponents(dark, connectivity=8)
+    n, comp = cv2.connectedComponents(dark, connectivity=8) if components is None \
+        else components
     lab = comp.ravel()[flat_at]
     area, _, _, mxx, myy, mxy, _, _ = object_moments(comp, n - 1)
     s2 = float(step) ** 2
@@ -348,10 +393,10 @@ def _detected_void(image, mask, noise, mineral):
         config.FLAT_CORE_CONTRAST * (mineral - float(median(core)))))
     if flat.size < config.DETECTED_PLATEAU_MIN_PX:
         return float("nan")
-    _, comp = cv2.connectedComponents(mask, connectivity=8)
-    if np.bincount(comp.ravel()[flat_at]).max() < config.DETECTED_PLATEAU_MIN_PX:
+    comps = cv2.connectedComponents(mask, connectivity=8)
+    if np.bincount(comps[1].ravel()[flat_at]).max() < config.DETECTED_PLATEAU_MIN_PX:
         return float("nan")   # the flat spots of line crossings, no plateau
-    void, _ = _void_components(mask, flat, flat_at, noise, mineral)
+    void, _ = _void_components(mask, flat, flat_at, noise, mineral, components=comps)
     return float(np.median(flat if void is None else flat[void]))
 
 
