@@ -187,9 +187,9 @@ def test_cracks_as_dark_as_a_dark_mineral_read_their_void_on_their_own_plateaus(
     assert "void grey is read as" in th.note
 
 
-def test_a_large_image_finds_the_plateaus_of_its_5_px_cracks():
+def test_a_large_image_finds_the_plateaus_of_its_4_px_cracks():
     """On a 3-MP image the dark class is read on every 4th pixel, where a plateau needed
-    12 px of width: 5-px cracks showed none, and a small dark grain (105 grey, 1.4 % of the
+    12 px of width: 4-px cracks showed none, and a small dark grain (105 grey, 1.4 % of the
     image, under the mineral share) gave the void grey, 105 instead of 30 (a speed-set
     image read area +39 %, valid). The plateaus are looked for at full resolution."""
     import cv2
