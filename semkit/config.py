@@ -22,6 +22,15 @@ FLATTEN_GAUSS_FRACTION = 0.15
 # --- threshold ------------------------------------------------------------------------------
 #: a mineral phase must hold at least this share of the pixels to count as a grey-level peak.
 MINERAL_MIN_FRACTION = 0.02
+#: an image whose darkest mineral phase lies largely (this share of its pixels, on the
+#: closed image) in long, narrow objects (principal axes at least LINE_PHASE_ELONGATION to 1,
+#: at most LINE_PHASE_MAX_WIDTH_PX wide) is flagged: cracks wider than the closing (15-40 px,
+#: 6-7 % of the image) pass for the darkest mineral, nothing is darker, and the image read no
+#: crack, valid. Their phase: 0.43-0.87 of it in such objects; minerals' 0-0.25. Development
+#: image 6's dark mineral, closed into an elongated cluster of grains, is 145 px wide
+LINE_PHASE_MIN_SHARE = 0.35
+LINE_PHASE_ELONGATION = 3.0
+LINE_PHASE_MAX_WIDTH_PX = 80.0
 #: the dark-tail seed lies this many noise sigmas below the darkest mineral peak.
 DARK_TAIL_SIGMAS = 5.0
 DARK_TAIL_NOISE_SIGMAS = 8.0

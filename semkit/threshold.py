@@ -49,6 +49,9 @@ class DarkLevels:
     #: phase, left out of the void grey with the pores, :func:`_void_components`); 0 when none
     #: stands apart
     phase_share: float = 0.0
+    #: share of the darkest mineral phase (on the closed image) in long, narrow objects
+    #: (:func:`_elongated_share`); 0 when it is the only phase
+    line_share: float = 0.0
 
 
 @dataclasses.dataclass
@@ -203,6 +206,10 @@ def dark_class_levels(image) -> DarkLevels:
         hcs.sum(), 1e-12)
     major = np.flatnonzero(mass >= config.MINERAL_MIN_FRACTION)
     q = int(major[0]) if major.size else int(np.argmax(mass))
+    # a darkest "phase" lying largely in long, narrow objects may be cracks wider than the
+    # closing, not a mineral (measured here, flagged by threshold_auto)
+    line_share = _elongated_share(_phase_mask(closed, c, bounds, q), step) \
+        if major.size > 1 else 0.0
     # refine on the image's own histogram: the local maximum near the closed-image peak
     # (closing shifts a noisy level up by ~1-2 sigma)
     h, _ = _hist(sub.ravel(), lo, hi)
@@ -256,7 +263,40 @@ def dark_class_levels(image) -> DarkLevels:
             crack = min(float(tc[int(np.argmax(smooth_profile(th, 1.5)))]),
                         config.THIN_ONLY_CRACK_RATIO * mineral)
     return DarkLevels(mineral, float(sigma), crack, float(seed), n_dark, sn, resolved=resolved,
-                      flat_crack=flat_crack, phase_share=phase_share)
+                      flat_crack=flat_crack, phase_share=phase_share, line_share=line_share)
+
+
+def _phase_mask(closed, centres, bounds, k):
+    """Pixels of the closed image in histogram peak ``k``'s range (between its valleys)."""
+    lo = centres[bounds[k]] if bounds[k] > 0 else -np.inf
+    hi = centres[bounds[k + 1]] if bounds[k + 1] < len(centres) else np.inf
+    return (closed >= lo) & (closed < hi)
+
+
+def _elongated_share(mask, step=1):
+    """Share of the pixels of ``mask`` (an image subsampled by ``step``) in line-like objects:
+    8-connected components whose principal second moments differ by ``LINE_PHASE_ELONGATION``
+    squared or more and whose widest point (twice the largest distance to their edge) is at
+    most ``LINE_PHASE_MAX_WIDTH_PX`` of the full image. Grains, and a mineral's matrix around
+    them, are about as long as wide, and an elongated cluster of grains is wide; a crack, even
+    40 px wide, is many times longer than wide (crossing cracks, closed into one network,
+    less so)."""
+    import cv2
+
+    from .measure import object_moments
+    m8 = np.ascontiguousarray(mask).view(np.uint8)
+    n, lab = cv2.connectedComponents(m8, connectivity=8)
+    if n <= 1:
+        return 0.0
+    area, _, _, mxx, myy, mxy, _, _ = object_moments(lab, n - 1)
+    half = 0.5 * (mxx + myy)
+    disc = np.sqrt(0.25 * (mxx - myy) ** 2 + mxy ** 2)
+    widest = np.zeros(n, np.float32)
+    np.maximum.at(widest, lab.ravel(), cv2.distanceTransform(m8, cv2.DIST_L2, 3).ravel())
+    line = ((half + disc) >= config.LINE_PHASE_ELONGATION ** 2 * np.maximum(half - disc, 1e-2)) \
+        & (2.0 * step * widest <= config.LINE_PHASE_MAX_WIDTH_PX)
+    line[0] = False
+    return float(area[line].sum() / max(area[1:].sum(), 1.0))
 
 
 def _full_resolution_plateaus(image, seed, noise, mineral, max_range):
@@ -515,6 +555,18 @@ def threshold_auto(image, *, area_fraction=config.AUTO_AREA_FRACTION,
     from . import _kernels
     img = np.asarray(image, np.float32)
     lv = dark_class_levels(img)
+
+    def flagged(r):
+        """``r``, not ok when the darkest mineral phase lies largely in long, narrow objects:
+        cracks wider than the closing pass for a mineral and are missed."""
+        if lv.line_share >= config.LINE_PHASE_MIN_SHARE:
+            r.ok = False
+            r.note = "; ".join(t for t in (r.note, (
+                f"the darkest mineral phase (grey {lv.mineral:.4g}) lies {lv.line_share:.0%} "
+                f"in long objects at most {config.LINE_PHASE_MAX_WIDTH_PX:g} px wide: cracks "
+                "wider than about 10 px may pass for a mineral and be missed")) if t)
+        return r
+
     # a 7 x 7 grey closing fills every dark feature narrower than ~6 px: the narrow dark lines
     # of the no-dark-class branch and of the candidates below lie well under it
     closed = cv2.morphologyEx(img, cv2.MORPH_CLOSE, np.ones((7, 7), np.uint8))
@@ -532,11 +584,12 @@ def threshold_auto(image, *, area_fraction=config.AUTO_AREA_FRACTION,
             if share < config.LINE_CRACK_MIN_SHARE:
                 m = np.zeros(img.shape, bool)
                 if share < config.LINE_WARN_SHARE:
-                    return ThresholdResult(m, m, "auto", lv.seed, 0.0, True, "no dark class")
-                return ThresholdResult(
+                    return flagged(ThresholdResult(m, m, "auto", lv.seed, 0.0, True,
+                                                   "no dark class"))
+                return flagged(ThresholdResult(
                     m, m, "auto", lv.seed, 0.0, False,
                     f"no dark class, but narrow dark lines hold {share:.2%} of the image: "
-                    "cracks as dark as the darkest mineral may be missed")
+                    "cracks as dark as the darkest mineral may be missed"))
         lv = dataclasses.replace(lv, crack=crack)
         note0 = "no dark tail below the darkest mineral: cracks found as narrow dark lines"
     sn = lv.noise
@@ -603,9 +656,9 @@ def threshold_auto(image, *, area_fraction=config.AUTO_AREA_FRACTION,
             f"is taken as {lv.crack:.4g}, at most {config.THIN_ONLY_CRACK_RATIO:g} x the darkest "
             "mineral, and thin-crack areas scale with the contrast to it")) if t)
     note = "; ".join(t for t in (note0, note) if t)
-    return ThresholdResult(area, detect, "auto", value, frac, ok, note, background=bg,
+    return flagged(ThresholdResult(area, detect, "auto", value, frac, ok, note, background=bg,
                            crack_level=lv.crack, noise=sd, contrast=lv.mineral - lv.crack,
-                           void_level=void, dark_phase_share=lv.phase_share)
+                           void_level=void, dark_phase_share=lv.phase_share))
 
 
 def coverage(image, background, crack_level):

@@ -56,11 +56,14 @@ def test_microct_surround_is_never_a_crack(microct):
     assert (microct.roi == "surround").all()
     assert microct.outside_region_px.sum() == 0
     # every slice is valid but the noisiest (slice 176: contrast 10.4 noise sigmas, F1 0.72,
-    # the largest area ratio), flagged for its noise alone
+    # the largest area ratio), flagged for its noise alone, and slice 504, whose darkest
+    # "mineral" lies 43 % in long narrow objects (its wide fracture: read as cracks there,
+    # its F1 went 0.94 -> 0.97), flagged for it
     flagged = microct[~microct.valid]
-    assert len(flagged) <= 1, flagged.image.tolist()
-    assert (flagged.contrast_to_noise < config.MIN_CONTRAST_TO_NOISE).all()
-    assert flagged.valid_note.str.startswith("noise:").all()
+    assert len(flagged) <= 2, flagged.image.tolist()
+    noisy = flagged.valid_note.str.startswith("noise:")
+    assert (flagged.contrast_to_noise[noisy] < config.MIN_CONTRAST_TO_NOISE).all()
+    assert (noisy | flagged.valid_note.str.contains("long objects")).all()
     assert microct.reported_area_ratio.max() <= MICROCT_AREA_RATIO_MAX
     assert np.isfinite(microct.f1).all()
 

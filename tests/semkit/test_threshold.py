@@ -206,6 +206,28 @@ def test_a_large_image_finds_the_plateaus_of_its_4_px_cracks():
     assert lv.phase_share > 0.4          # the grain's plateau is a brighter phase
 
 
+@pytest.mark.parametrize("widths", [(15.0, 40.0), (25.0, 60.0)])
+def test_cracks_wider_than_the_closing_are_flagged_not_read_as_none(widths):
+    """Cracks 15-60 px wide (a high magnification) survive the 11 x 11 closing that finds the
+    minerals: they were the darkest mineral, nothing was darker, and the image read no crack
+    and was valid. Their phase lies mostly in long, narrow objects: flagged."""
+    from semkit.analysis import analyse_image
+    s = make_sem_image((768, 1024), stage="pre", widths=widths, n_cracks=10, seed=5)
+    row = analyse_image(s.image, pixel_size_um=1.0, stage="pre-test",
+                        classify=False).summary()
+    assert not row["valid"] and "long objects" in row["threshold_note"], row["valid_note"]
+
+
+def test_a_dark_mineral_of_grains_is_not_flagged_as_wide_cracks():
+    """Development image 6's dark mineral (74 grey) closes into an elongated cluster of
+    grains, but 145 px wide: not long narrow objects."""
+    from semkit.analysis import analyse_image
+    s = dev_scene(6)
+    lv = dark_class_levels(np.asarray(analyse_image(s.image, pixel_size_um=1.0).smooth,
+                                      np.float32))
+    assert 0.0 < lv.line_share < config.LINE_PHASE_MIN_SHARE, lv.line_share
+
+
 @pytest.mark.parametrize("width,blur", [(1.5, 1.0), (2.0, 1.4), (3.0, 1.0)])
 def test_hairline_only_image_reads_no_partial_volume_as_the_crack_grey(width, blur):
     """Every crack 1.5-3 px wide and blurred: the darkest grey across each is a partial volume
