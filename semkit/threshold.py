@@ -657,8 +657,9 @@ def threshold_auto(image, *, area_fraction=config.AUTO_AREA_FRACTION,
             "mineral, and thin-crack areas scale with the contrast to it")) if t)
     note = "; ".join(t for t in (note0, note) if t)
     return flagged(ThresholdResult(area, detect, "auto", value, frac, ok, note, background=bg,
-                           crack_level=lv.crack, noise=sd, contrast=lv.mineral - lv.crack,
-                           void_level=void, dark_phase_share=lv.phase_share))
+                                   crack_level=lv.crack, noise=sd,
+                                   contrast=lv.mineral - lv.crack, void_level=void,
+                                   dark_phase_share=lv.phase_share))
 
 
 def coverage(image, background, crack_level):
