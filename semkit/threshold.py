@@ -244,7 +244,7 @@ def dark_class_levels(image) -> DarkLevels:
         flat, flat_at = _flat_core_values(a, interior, step, max_range) \
             if core.size >= 20 else (np.zeros(0, np.float32), np.zeros(0, np.int64))
         resolved = flat.size >= config.MIN_FLAT_CORE_PX
-        full = _full_resolution_plateaus(a, seed, sn, mineral, max_range) if step > 2 else None
+        full = _full_resolution_plateaus(a, seed, sn, max_range) if step > 2 else None
         vstep, comps = step, None
         if full is not None:  # the void is read on them
             dark, flat, flat_at, comps = full
@@ -299,38 +299,52 @@ def _elongated_share(mask, step=1):
     return float(area[line].sum() / max(area[1:].sum(), 1.0))
 
 
-def _full_resolution_plateaus(image, seed, noise, mineral, max_range):
+def _plateaus(image, mask, interior, max_range):
+    """Flat pixels of ``interior`` and the components of ``mask``, or None when no object of
+    ``mask`` holds a plateau.
+
+    The flat pixels are those of :func:`_flat_core_values` (full resolution); one 8-connected
+    component of ``mask`` (uint8) must hold at least ``DETECTED_PLATEAU_MIN_PX`` of them: where
+    blurred 3-px lines cross, the flat spot is a partial volume of a few tens of px.
+
+    Returns
+    -------
+    (flat, flat_at, components) or None
+        The flat pixels' grey and raveled indices, and
+        ``cv2.connectedComponents(mask, connectivity=8)``.
+    """
+    import cv2
+    if np.count_nonzero(interior) < config.DETECTED_PLATEAU_MIN_PX:
+        return None
+    flat, flat_at = _flat_core_values(image, interior, 1, max_range)
+    if flat.size < config.DETECTED_PLATEAU_MIN_PX:
+        return None
+    comps = cv2.connectedComponents(mask, connectivity=8)
+    if np.bincount(comps[1].ravel()[flat_at]).max() < config.DETECTED_PLATEAU_MIN_PX:
+        return None
+    return flat, flat_at, comps
+
+
+def _full_resolution_plateaus(image, seed, noise, max_range):
     """The dark class's plateaus read at full resolution, or None when no crack holds one.
 
     :func:`dark_class_levels` reads the dark class on the image subsampled by ``step``, where
     a plateau needs 3 x ``step`` px of width: 6 px up to 1.2 MP, 12 px on a 3-MP image (8-px
     cracks showed none, and a dark grain's plateau was taken for the void). Used from step 3
     on, so the width stays that of step 2: the interior is the dark class eroded by 7 x 7 at
-    full resolution (cracks >= 7 px wide), its flat pixels
-    (:func:`_flat_core_values`, ``max_range`` as there, or ``FLAT_CORE_SIGMAS`` noise sigmas
-    when 0), and one 8-connected component of the dark class must hold at least
-    ``DETECTED_PLATEAU_MIN_PX`` of them (where blurred 3-px lines cross the dark class is that
-    wide over a few tens of px of partial volume).
+    full resolution (cracks >= 7 px wide), and :func:`_plateaus` reads its flat pixels
+    (``max_range`` as there, or ``FLAT_CORE_SIGMAS`` noise sigmas when 0).
 
     Returns
     -------
     (dark, flat, flat_at, components) or None
-        The full-resolution dark mask (uint8), the flat pixels' grey and raveled indices, and
-        ``cv2.connectedComponents(dark, connectivity=8)``.
+        The full-resolution dark mask (uint8) and :func:`_plateaus`' output.
     """
     import cv2
     dark = (image < np.float32(seed)).view(np.uint8)
     interior = cv2.erode(dark, np.ones((7, 7), np.uint8)).view(bool)
-    if np.count_nonzero(interior) < config.DETECTED_PLATEAU_MIN_PX:
-        return None
-    flat, flat_at = _flat_core_values(image, interior, 1,
-                                      max_range or config.FLAT_CORE_SIGMAS * noise)
-    if flat.size < config.DETECTED_PLATEAU_MIN_PX:
-        return None
-    comps = cv2.connectedComponents(dark, connectivity=8)
-    if np.bincount(comps[1].ravel()[flat_at]).max() < config.DETECTED_PLATEAU_MIN_PX:
-        return None
-    return dark, flat, flat_at, comps
+    found = _plateaus(image, dark, interior, max_range or config.FLAT_CORE_SIGMAS * noise)
+    return None if found is None else (dark, *found)
 
 
 def _flat_core_values(image, interior, step, max_range):
@@ -416,11 +430,10 @@ def _detected_void(image, mask, noise, mineral):
     False): cracks as dark as a dark mineral lie above the dark class, yet the threshold finds
     them by their depth below the local background. ``mask`` is the midpoint mask on the darker
     guess of the crack grey (a blurred line's detect mask is wide, its midpoint mask is not).
-    Its pixels at least ``DETECTED_CORE_PX`` from its edge (the cores of cracks >= 5 px wide) in
-    a flat 3 x 3 neighbourhood (:func:`_flat_core_values`) are the candidates; one object must
-    hold at least ``DETECTED_PLATEAU_MIN_PX`` of them (where blurred lines cross, the flat spot
-    is a partial volume of a few tens of px); pores and brighter plateaus (a dark phase) are
-    left out by :func:`_void_components`, and the void grey is the median of the rest.
+    Its pixels at least ``DETECTED_CORE_PX`` from its edge (the cores of cracks >= 5 px wide)
+    are the candidates, one object holding a plateau of them (:func:`_plateaus`); pores and
+    brighter plateaus (a dark phase) are left out by :func:`_void_components`, and the void
+    grey is the median of the rest.
     """
     import cv2
     mask = np.ascontiguousarray(mask).view(np.uint8)
@@ -428,14 +441,12 @@ def _detected_void(image, mask, noise, mineral):
     core = image[interior]
     if core.size < config.DETECTED_PLATEAU_MIN_PX:
         return float("nan")
-    flat, flat_at = _flat_core_values(image, interior, 1, max(
+    found = _plateaus(image, mask, interior, max(
         config.FLAT_CORE_SIGMAS * noise,
         config.FLAT_CORE_CONTRAST * (mineral - float(median(core)))))
-    if flat.size < config.DETECTED_PLATEAU_MIN_PX:
+    if found is None:
         return float("nan")
-    comps = cv2.connectedComponents(mask, connectivity=8)
-    if np.bincount(comps[1].ravel()[flat_at]).max() < config.DETECTED_PLATEAU_MIN_PX:
-        return float("nan")   # the flat spots of line crossings, no plateau
+    flat, flat_at, comps = found
     void, _ = _void_components(mask, flat, flat_at, noise, mineral, components=comps)
     return float(np.median(flat if void is None else flat[void]))
 
