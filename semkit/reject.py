@@ -67,14 +67,17 @@ def _lone_line(e):
             & (e.side_depth >= config.LONE_LINE_DEPTH))
 
 
+def _dark_zone(e):
+    """In a dark phase, and not reaching the crack core grey: what ``dark_phase`` judges."""
+    return (e.background_rel < config.REJECT_DARK_BACKGROUND) \
+        & (e.side_depth < config.REJECT_ZONE_MAX_DEPTH)
+
+
 def kept_lone_lines(evidence, rejected_as):
     """Which objects are kept only as lone lines (:func:`_lone_line`): the dark-phase rule's
     zone test holds for them, and no rule rejected them (a boolean Series like
     ``rejected_as``)."""
-    e = evidence
-    zone = (e.background_rel < config.REJECT_DARK_BACKGROUND) \
-        & (e.side_depth < config.REJECT_ZONE_MAX_DEPTH)
-    return zone & _lone_line(e) & (np.asarray(rejected_as) == "")
+    return _dark_zone(evidence) & _lone_line(evidence) & (np.asarray(rejected_as) == "")
 
 
 #: the rules in the order they are tried: name, test on the evidence table
@@ -93,8 +96,7 @@ RULES = (
     ("compact_dark", lambda e: (e.slenderness < config.REJECT_COMPACT_SLENDERNESS)
      & (e.width_px >= config.REJECT_COMPACT_WIDTH_PX)
      & (e.side_depth < config.REJECT_ZONE_MAX_DEPTH)),
-    ("dark_phase", lambda e: (e.background_rel < config.REJECT_DARK_BACKGROUND)
-     & (e.side_depth < config.REJECT_ZONE_MAX_DEPTH) & ~_lone_line(e)),
+    ("dark_phase", lambda e: _dark_zone(e) & ~_lone_line(e)),
     ("mottled", lambda e: (e.background_rel < config.REJECT_MOTTLED_BACKGROUND)
      & (e.density >= config.REJECT_MOTTLED_DENSITY)
      & (e.neighbours >= config.REJECT_MOTTLED_NEIGHBOURS)
