@@ -99,6 +99,13 @@ DETECTED_PLATEAU_MIN_PX = 50
 VOID_PLATEAU_MIN_PX = 20
 VOID_PLATEAU_BAND = 6.0
 VOID_PLATEAU_CONTRAST = 0.15
+#: ... and no plateau holds the void when at least this share of the dark class's non-pore
+#: pixels (and VOID_PLATEAU_MIN_PX) lie more than that band below the darkest one: partial
+#: volumes are brighter than the void, never darker, so the plateaus are a dark phase (the
+#: drawn family with 12 dark laths: 31-40 % of the pixels undercut the laths' plateau; the
+#: development, line and drawn families without laths 0; JPEG ringing 0.3 %, crack grey 80
+#: stress images <= 1.3 %)
+VOID_UNDERCUT_SHARE = 0.05
 FLAT_CORE_SIGMAS = 4.0
 FLAT_CORE_CONTRAST = 0.15
 #: when nothing is darker than the darkest mineral, the crack grey is this low percentile.

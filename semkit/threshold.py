@@ -52,6 +52,9 @@ class DarkLevels:
     #: share of the darkest mineral phase (on the closed image) in long, narrow objects
     #: (:func:`_elongated_share`); 0 when it is the only phase
     line_share: float = 0.0
+    #: True when every plateau of the dark class lies above the cores of thinner cracks (a
+    #: dark phase): ``crack`` is then read on those cores and ``resolved`` is False
+    phase_plateaus: bool = False
 
 
 @dataclasses.dataclass
@@ -233,6 +236,7 @@ def dark_class_levels(image) -> DarkLevels:
     crack = flat_crack = float("nan")
     resolved = True
     phase_share = 0.0
+    below = np.zeros(0, np.float32)   # dark-class pixels under every plateau
     if tail.size >= 20:
         # interior pixels of cracks >= 3 px wide carry the core grey; thin cracks only
         # partial volumes, so they are used only when there is no interior at all
@@ -250,12 +254,19 @@ def dark_class_levels(image) -> DarkLevels:
             dark, flat, flat_at, comps = full
             vstep = 1
         if resolved or full is not None:
-            crack = float(np.median(core)) if core.size >= 20 else float(np.median(flat))
-            resolved = True
             # the void grey leaves out plateaus at a brighter grey (laths of a dark mineral);
             # detection keeps the dark class's median (its levels were set on it)
-            void, phase_share = _void_components(dark, flat, flat_at, sn, mineral, vstep,
-                                                 components=comps)
+            void, phase_share, below = _void_components(
+                dark, flat, flat_at, sn, mineral, vstep, components=comps,
+                grey=sub if full is None else a)
+        if below.size:
+            # every plateau lies above the cores of thinner cracks: a dark phase; the
+            # void is at most as dark as those cores
+            crack = float(np.percentile(below, config.LINE_CRACK_PERCENTILE))
+            resolved = False
+        elif resolved or full is not None:
+            crack = float(np.median(core)) if core.size >= 20 else float(np.median(flat))
+            resolved = True
             flat_crack = float(np.median(flat if void is None else flat[void]))
         else:  # all cracks thin: their darkest values are partial volumes; the core is
             # assumed at least as dark as 30 % of the darkest mineral (epoxy / void in BSE)
@@ -263,7 +274,8 @@ def dark_class_levels(image) -> DarkLevels:
             crack = min(float(tc[int(np.argmax(smooth_profile(th, 1.5)))]),
                         config.THIN_ONLY_CRACK_RATIO * mineral)
     return DarkLevels(mineral, float(sigma), crack, float(seed), n_dark, sn, resolved=resolved,
-                      flat_crack=flat_crack, phase_share=phase_share, line_share=line_share)
+                      flat_crack=flat_crack, phase_share=phase_share, line_share=line_share,
+                      phase_plateaus=bool(below.size))
 
 
 def _phase_mask(closed, centres, bounds, k):
@@ -369,7 +381,7 @@ def _flat_core_values(image, interior, step, max_range):
     return image[rr, cc][flat], at
 
 
-def _void_components(dark, flat, flat_at, noise, mineral, step=1, components=None):
+def _void_components(dark, flat, flat_at, noise, mineral, step=1, components=None, grey=None):
     """Which flat-core pixels of the dark class hold the void of the open cracks.
 
     Pores (compact, full components of ``dark``, :func:`semkit.measure.is_pore` at the full
@@ -403,6 +415,7 @@ def _void_components(dark, flat, flat_at, noise, mineral, step=1, components=Non
     pore = is_pore(area * s2, mxx * s2, myy * s2, mxy * s2)
     pore[0] = False
     keep = np.ones(n, bool)
+    below = np.zeros(0, np.float32)
     if np.count_nonzero(~pore[lab]) >= config.MIN_FLAT_CORE_PX:
         keep &= ~pore
     cnt = np.bincount(lab, minlength=n)
@@ -418,9 +431,21 @@ def _void_components(dark, flat, flat_at, noise, mineral, step=1, components=Non
                    config.VOID_PLATEAU_CONTRAST * (float(mineral) - void))
         above = plateau > void + band
         keep[big[above]] = False
+        if grey is not None:
+            # partial volumes are brighter than the void, never darker: dark pixels (not
+            # pores) well below the darkest plateau show a darker void, and the plateaus
+            # are a dark phase
+            low = (np.asarray(grey) < void - band) & (comp > 0)
+            low &= ~pore[comp]
+            n_low = np.count_nonzero(low)
+            if n_low * s2 >= config.VOID_PLATEAU_MIN_PX and n_low >= config.VOID_UNDERCUT_SHARE \
+                    * np.count_nonzero((comp > 0) & ~pore[comp]):
+                below = np.asarray(grey)[low]
+    if below.size:
+        return np.zeros(len(flat), bool), 1.0, below
     if keep[lab].all():
-        return None, 0.0
-    return keep[lab], float(cnt[big[above]].sum()) / max(len(flat), 1)
+        return None, 0.0, below
+    return keep[lab], float(cnt[big[above]].sum()) / max(len(flat), 1), below
 
 
 def _detected_void(image, mask, noise, mineral):
@@ -447,7 +472,10 @@ def _detected_void(image, mask, noise, mineral):
     if found is None:
         return float("nan")
     flat, flat_at, comps = found
-    void, _ = _void_components(mask, flat, flat_at, noise, mineral, components=comps)
+    void, _, below = _void_components(mask, flat, flat_at, noise, mineral, components=comps,
+                                      grey=image)
+    if below.size:
+        return float("nan")
     return float(np.median(flat if void is None else flat[void]))
 
 
@@ -656,11 +684,17 @@ def threshold_auto(image, *, area_fraction=config.AUTO_AREA_FRACTION,
     frac = float(area.mean())
     value = 0.5 * (lv.mineral + lv.crack)
     ok, note = _check_dark_class(img, area, frac, lv)
+    phase = "the dark class's plateaus lie above the cores of thinner cracks (a dark phase)" \
+        if lv.phase_plateaus else ""
     if not lv.resolved and np.isfinite(detected_void):
+        why = phase or "no crack shows its core grey below the darkest mineral"
         note0 = "; ".join(t for t in (note0, (
-            f"no crack shows its core grey below the darkest mineral: the void grey is read "
-            f"as {detected_void:.4g} on the flat cores of the widest detected objects, and "
-            "areas scale with the contrast to it")) if t)
+            f"{why}: the void grey is read as {detected_void:.4g} on the flat cores of the "
+            "widest detected objects, and areas scale with the contrast to it")) if t)
+    elif phase:
+        note0 = "; ".join(t for t in (note0, (
+            f"{phase}: the crack grey is read as {lv.crack:.4g} on those cores, and areas "
+            "scale with the contrast to it")) if t)
     elif not lv.resolved:
         note0 = "; ".join(t for t in (note0, (
             f"no crack shows its core grey (all are narrower than the blur): the crack grey "

@@ -55,15 +55,16 @@ def test_microct_surround_is_never_a_crack(microct):
     40 and numbers written anyway (issue 15)."""
     assert (microct.roi == "surround").all()
     assert microct.outside_region_px.sum() == 0
-    # every slice is valid but the noisiest (slice 176: contrast 10.4 noise sigmas, F1 0.72,
-    # the largest area ratio), flagged for its noise alone, and slice 504, whose darkest
-    # "mineral" lies 43 % in long narrow objects (its wide fracture: read as cracks there,
-    # its F1 went 0.94 -> 0.97), flagged for it
+    # at most two slices are flagged, each for a reason the slice shows: noise (slice 176
+    # while its void was read on the fracture's plateaus: contrast 10.4 noise sigmas), faint
+    # lines (slice 0: 24 % of its length in the dark rims of bright inclusions, F1 0.68) or a
+    # darkest "mineral" lying largely in long narrow objects (slice 504's wide fracture)
     flagged = microct[~microct.valid]
     assert len(flagged) <= 2, flagged.image.tolist()
     noisy = flagged.valid_note.str.startswith("noise:")
     assert (flagged.contrast_to_noise[noisy] < config.MIN_CONTRAST_TO_NOISE).all()
-    assert (noisy | flagged.valid_note.str.contains("long objects")).all()
+    assert (noisy | flagged.valid_note.str.contains("long objects")
+            | flagged.valid_note.str.startswith("faint lines:")).all()
     assert microct.reported_area_ratio.max() <= MICROCT_AREA_RATIO_MAX
     assert np.isfinite(microct.f1).all()
 

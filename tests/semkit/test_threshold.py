@@ -378,10 +378,11 @@ def test_the_void_grey_leaves_out_the_plateaus_of_dark_laths():
     assert lv.crack > 60.0, lv
 
 
-def _synth_with_laths(n_laths, seed=3):
-    """A ``semkit.synth`` post-test image (8 cracks 3-8 px wide) with ``n_laths`` laths of a
-    dark mineral (the drawn family's :func:`paint_laths`: 30-80 x 6-10 px, 6 px or more from
-    every crack) at a grey 0.45 of the way from the crack grey to the rock around them."""
+def _synth_with_laths(n_laths, seed=3, widths=(3.0, 8.0), lath_width=(6, 10)):
+    """A ``semkit.synth`` post-test image (8 cracks ``widths`` px wide) with ``n_laths`` laths
+    of a dark mineral (the drawn family's :func:`paint_laths`: 30-80 x ``lath_width`` px, 6 px
+    or more from every crack) at a grey 0.45 of the way from the crack grey to the rock around
+    them."""
     import sys
 
     from scipy import ndimage as ndi
@@ -391,11 +392,33 @@ def _synth_with_laths(n_laths, seed=3):
     if str(bench) not in sys.path:   # one definition of the laths for the test and it
         sys.path.insert(0, str(bench))
     from semkit_drawn_family import paint_laths
-    s = make_sem_image((384, 512), stage="post", seed=seed, n_cracks=8, widths=(3.0, 8.0))
+    s = make_sem_image((384, 512), stage="post", seed=seed, n_cracks=8, widths=widths)
     keep_out = ndi.binary_dilation(s.crack_mask, iterations=6)
     img = paint_laths(s.image, keep_out, n_laths, np.random.default_rng(seed), blur=0.8,
-                      crack_grey=CRACK_GREY, share=(0.45, 0.45), size=((30, 80), (6, 10)))
+                      crack_grey=CRACK_GREY, share=(0.45, 0.45), size=((30, 80), lath_width))
     return img, s
+
+
+@pytest.mark.parametrize("seed", [1, 2])
+def test_plateaus_above_the_cores_of_thinner_cracks_are_a_dark_phase(seed):
+    """Cracks 1.5-3 px wide (void 30) show no plateau; 12 laths 8-12 px wide at ~100 grey do.
+    The laths' plateau read as the void (64-65), and every lath and partial volume counted
+    against it: area +201 % and +63 %. Partial volumes are brighter than the void, never
+    darker: the cracks' cores lying well below every plateau show the plateaus are a dark
+    phase, and the crack grey is read on those cores."""
+    from semkit.analysis import analyse_image
+    from semkit.synth import CRACK_GREY
+    from semkit.threshold import dark_class_levels
+    img, s = _synth_with_laths(12, seed=seed, widths=(1.5, 3.0), lath_width=(8, 12))
+    a = analyse_image(img, pixel_size_um=1.0, stage="failure", classify=False)
+    lv = dark_class_levels(a.smooth)
+    assert lv.phase_plateaus and not lv.resolved
+    assert abs(a.thresholded.void_level - CRACK_GREY) < 10.0, a.thresholded.void_level
+    assert "plateaus lie above the cores of thinner cracks" in a.thresholded.note
+    row = a.summary()   # the laths themselves are still counted: +34 % and +20 %
+    assert abs(row["crack_area_um2"] / s.cracks["area_cov_px"].sum() - 1) < 0.4
+    # without the laths: the cracks' own greys, no such reading
+    assert not dark_class_levels(denoise(flatten_illumination(s.image)[0])).phase_plateaus
 
 
 def test_an_image_whose_dark_class_holds_a_dark_phase_is_flagged():
