@@ -384,8 +384,10 @@ class CrackAnalysis:
     def _object_evidence(self, labels, n, relief=None):
         from .reject import object_evidence
         from .threshold import noise_sigma
+        t = None if self.options.segmenter is not None else self.thresholded
         return object_evidence(labels, n, self.smooth, crack_level=self.crack_level,
                                noise=noise_sigma(self.smooth),
+                               void_level=None if t is None else t.void_level,
                                skeleton=self.skeleton if self.options.length else None,
                                region=self.region.mask, relief=relief)
 

@@ -327,9 +327,9 @@ LINK_EDGE_KAPPA = 1.0
 #: marked cracks, micro-CT slices 1-10 and semkit.synth seeds 11-16; docs/semkit.md)
 LINK_SNR = 4.0
 #: objects rejected by these rules of the first pass (their surroundings say they are no
-#: crack) are kept out of linking; objects rejected for their own shape (phase_rim,
+#: crack, or they are a dark phase's band) are kept out of linking; objects rejected for their own shape (phase_rim,
 #: compact_dark: a bead too round or short on its own) and pores may be passed through
-LINK_EXCLUDE_RULES = ("dark_phase", "mottled", "grain_rim")
+LINK_EXCLUDE_RULES = ("dark_phase", "mottled", "grain_rim", "dark_band")
 #: lines keep this far (px) from an excluded object (more than the 1-px gap that
 #: cleanup.bridge_gaps closes), so they never join one
 LINK_EXCLUDE_PX = 2
@@ -405,6 +405,19 @@ REJECT_MOTTLED_NEIGHBOURS = 4
 #: an object whose dark core reaches this share of the crack contrast is an open crack or
 #: void: the dark-phase, mottled, compact and grain-rim rules never reject it
 REJECT_ZONE_MAX_DEPTH = 0.85
+#: a dark band (a lath or vein of a darker mineral): at least this share of its pixels lie
+#: REJECT_BAND_INTERIOR_PX or more inside it (wide enough to show its core grey through any
+#: blur); that interior's dark core lies less than REJECT_BAND_DEPTH of the way from the darker
+#: side around it to the void grey; it is smooth (median 5 x 5 grey standard deviation under
+#: REJECT_BAND_MAX_ROUGH noise sigmas: flat mineral ~1.3; the drawn family's laths 0.4-3.8; its
+#: cracks as shallow, with debris or merged layers inside, 6.8-26); and it is darkest inside
+#: (its whole dark core less than REJECT_BAND_MAX_WALL below the interior's: laths -0.09-0.00;
+#: a development crack with dark walls and a grey middle 0.11, most shallow drawn cracks more)
+REJECT_BAND_INTERIOR_PX = 3.0
+REJECT_BAND_INTERIOR_SHARE = 0.15
+REJECT_BAND_DEPTH = 0.7
+REJECT_BAND_MAX_ROUGH = 5.0
+REJECT_BAND_MAX_WALL = 0.05
 #: an image whose zone and shape rules (all but phase_rim) rejected at least this share of the
 #: dark objects' area is flagged (valid = False): its figures rest on the rules
 REJECT_MAX_ZONE_SHARE = 0.2

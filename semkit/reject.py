@@ -37,6 +37,16 @@ Every cleaned object gets a few measures (:func:`object_evidence`):
   centre: a mottled area is many separate specks, a crack network (even with its debris) is
   one object with few around it.
 * ``texture`` — grey standard deviation of the ring in noise sigmas (reported, not a rule).
+* ``interior_share``, ``interior_depth``, ``interior_rough``, ``wall_depth`` — the share of
+  the object's pixels at least ``REJECT_BAND_INTERIOR_PX`` inside it (a band wide enough to
+  show its core grey through the blur); how far that interior's dark core (20th percentile)
+  lies below the darker side of the ring, as a share of that side's contrast to the *void*
+  grey (the grey areas are measured against); the interior's median 5 x 5 grey standard
+  deviation in noise sigmas (a step where a band crosses two minerals moves the median
+  little); and how far the whole object's dark core lies below its interior's, in the same
+  unit. A lath of a darker mineral is wide, uniform, stops short of the void and is darkest
+  inside (``dark_band``); a crack as wide reaches the void, or is rough inside (debris,
+  merged layers) or has darker walls than its middle.
 
 An object whose dark core reaches the crack core grey (``side_depth`` at least
 ``REJECT_ZONE_MAX_DEPTH``: an open, void- or epoxy-filled crack) is never rejected for its
@@ -96,6 +106,10 @@ RULES = (
     ("compact_dark", lambda e: (e.slenderness < config.REJECT_COMPACT_SLENDERNESS)
      & (e.width_px >= config.REJECT_COMPACT_WIDTH_PX)
      & (e.side_depth < config.REJECT_ZONE_MAX_DEPTH)),
+    ("dark_band", lambda e: (e.interior_share >= config.REJECT_BAND_INTERIOR_SHARE)
+     & (e.interior_depth < config.REJECT_BAND_DEPTH)
+     & (e.interior_rough < config.REJECT_BAND_MAX_ROUGH)
+     & (e.wall_depth < config.REJECT_BAND_MAX_WALL)),
     ("dark_phase", lambda e: _dark_zone(e) & ~_lone_line(e)),
     ("mottled", lambda e: (e.background_rel < config.REJECT_MOTTLED_BACKGROUND)
      & (e.density >= config.REJECT_MOTTLED_DENSITY)
@@ -209,7 +223,7 @@ def zone_relief(grey, crack_level, region=None):
 
 
 def object_evidence(labels, n, grey, *, crack_level, noise, skeleton=None, region=None,
-                    relief=None):
+                    relief=None, void_level=None):
     """Shape and surroundings of every object (see the module docstring).
 
     Parameters
@@ -228,15 +242,19 @@ def object_evidence(labels, n, grey, *, crack_level, noise, skeleton=None, regio
         Sample region (the rock's background level is read inside it).
     relief : (M, N) ndarray, optional
         :func:`zone_relief` of ``grey`` (computed when not given).
+    void_level : float, optional
+        Void grey (``interior_depth`` is read against it); ``crack_level`` when not given.
 
     Returns
     -------
     evidence : pandas.DataFrame
         Index 1..n: ``area_px, side_depth, side_step, encloses_px, hole_lift, rim_share,
-        elongation, width_px, slenderness, background_rel, density, neighbours, texture``.
+        elongation, width_px, slenderness, background_rel, density, neighbours, texture,
+        interior_share, interior_depth, interior_rough, wall_depth``.
     """
     import cv2
 
+    from ._kernels import pixel_coords
     from .measure import object_moments
     lab = np.asarray(labels)
     g = np.asarray(grey, np.float32)
@@ -310,12 +328,34 @@ def object_evidence(labels, n, grey, *, crack_level, noise, skeleton=None, regio
                                 np.clip(np.rint(cx).astype(int), 0, lab.shape[1] - 1),
                                 config.ZONE_NEIGHBOUR_WINDOW_PX) - (area >= 5)
     texture = ring_sd / max(float(noise), 1e-6)
+    # the interior: pixels at least REJECT_BAND_INTERIOR_PX inside the object (where a band
+    # wide enough shows its core grey, whatever the blur); depths are read against the void
+    # grey the areas use (the crack grey is a guess when no crack shows a plateau)
+    dist = cv2.distanceTransform(on.view(np.uint8), cv2.DIST_L2, 3)
+    inner = dist >= config.REJECT_BAND_INTERIOR_PX
+    lab_in = lab[inner].astype(np.int64)
+    interior_share = np.bincount(lab_in, minlength=n + 1)[:n + 1] / np.maximum(area, 1.0)
+    in_core = _label_percentiles(g[inner], lab_in, n, (20.0,), std=False)[0][0]
+    # the grey standard deviation of each interior pixel's 5 x 5 window (read there only)
+    rr, cc = pixel_coords(inner)
+    d = np.arange(-2, 3)
+    win = g[np.clip(rr[:, None, None] + d[:, None], 0, h - 1),
+            np.clip(cc[:, None, None] + d[None, :], 0, w - 1)].reshape(rr.size, d.size ** 2)
+    interior_rough = _label_percentiles(win.std(axis=1), lab_in, n, (50.0,),
+                                        std=False)[0][0] / max(float(noise), 1e-6)
+    void = float(crack_level if void_level is None or not np.isfinite(void_level)
+                 else void_level)
+    to_void = np.maximum(ring_lo - void, 1e-3)
+    interior_depth = (ring_lo - in_core) / to_void
+    wall_depth = (in_core - core) / to_void
     ev = pd.DataFrame(dict(area_px=area, side_depth=side_depth, side_step=side_step,
                            encloses_px=encloses, hole_lift=hole_lift, rim_share=rim_share,
                            elongation=elong, width_px=width,
                            slenderness=sk / np.maximum(width, 1e-9),
                            background_rel=background_rel, density=density,
-                           neighbours=neighbours, texture=texture),
+                           neighbours=neighbours, texture=texture,
+                           interior_share=interior_share, interior_depth=interior_depth,
+                           interior_rough=interior_rough, wall_depth=wall_depth),
                       index=np.arange(n + 1))
     return ev.iloc[1:]
 

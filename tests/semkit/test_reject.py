@@ -10,7 +10,8 @@ def _row(**kw):
     base = dict(area_px=400.0, side_depth=0.9, side_step=0.1, encloses_px=0.0,
                 hole_lift=float("nan"), rim_share=0.0, elongation=10.0, width_px=3.0,
                 slenderness=40.0, background_rel=1.0, density=0.05, neighbours=0.0,
-                texture=1.0)
+                texture=1.0, interior_share=0.0, interior_depth=float("nan"),
+                interior_rough=float("nan"), wall_depth=float("nan"))
     return {**base, **kw}
 
 
@@ -271,3 +272,20 @@ def test_a_crack_that_leaves_a_dark_grain_is_cut_from_it_and_kept():
     assert 110 <= cut["length_px"] <= 160, cut["length_px"]
     # the open crack (~143 px) is measured as before
     assert a.summary()["n_cracks"] == 2
+
+
+def test_dark_band_is_a_wide_smooth_band_short_of_the_void_and_darkest_inside():
+    """A lath of a darker mineral (the drawn family's: interior 0.4-0.6 of the way to the
+    void, 5 x 5 roughness 0.4-3.8 noise sigmas, walls no darker than its middle) is a
+    ``dark_band``; a crack as shallow is rough inside (debris, merged layers: 6.8-26) or has
+    darker walls than its middle (a development crack: 0.11), and an open crack reaches the
+    void; a thin object has no interior to judge."""
+    lath = dict(interior_share=0.3, interior_depth=0.55, interior_rough=1.0, wall_depth=0.0,
+                side_depth=0.6, slenderness=6.0, width_px=10.0)
+    rows = [_row(**lath),
+            _row(**{**lath, "interior_rough": 8.0}),
+            _row(**{**lath, "wall_depth": 0.11}),
+            _row(**{**lath, "interior_depth": 0.95}),
+            _row(**{**lath, "interior_share": 0.05})]
+    ev = pd.DataFrame(rows, index=np.arange(1, len(rows) + 1))
+    assert list(reject_objects(ev)) == ["dark_band", "", "", "", ""]
