@@ -19,10 +19,11 @@ Every cleaned object gets a few measures (:func:`object_evidence`):
   whose holes hold less than ``REJECT_RIM_HOLE_SHARE`` of its area is a network with a small
   loop somewhere, not a rim.
 * ``rim_share`` — share of the object's pixels within its own width (+1.5 px) of the holes it
-  closes (NaN unless it closes a bright loop, ``REJECT_RIM_LOOP_PX`` and
-  ``REJECT_RIM_HOLE_LIFT``): ~1 for a ring, low for a crack network that closes one loop
-  around a grain and runs on elsewhere (less than ``REJECT_RIM_MIN_SHARE``: not a rim, however
-  bright the grain).
+  closes (NaN unless the other ``grain_rim`` conditions hold, where it decides: a bright
+  loop, ``REJECT_RIM_LOOP_PX`` and ``REJECT_RIM_HOLE_LIFT``, holding
+  ``REJECT_RIM_HOLE_SHARE`` of the object, short of ``REJECT_ZONE_MAX_DEPTH``, judged by its
+  size): ~1 for a ring, low for a crack network that closes one loop around a grain and runs
+  on elsewhere (less than ``REJECT_RIM_MIN_SHARE``: not a rim, however bright the grain).
 * ``elongation`` — sqrt of the ratio of the principal second moments (1 for a disc).
 * ``width_px`` — mean width, area over skeleton length; ``slenderness`` — skeleton length
   over mean width (a curved crack is slender even when its moments are not elongated).
@@ -303,10 +304,14 @@ def object_evidence(labels, n, grey, *, crack_level, noise, skeleton=None, regio
                                minlength=n + 1)[:n + 1]
         hole_grey = _label_percentiles(g.ravel()[at], owner[hole_of], n, (50.0,), std=False)[0][0]
     hole_lift = (hole_grey - ring_lo) / np.maximum(ring_lo - float(crack_level), 1e-3)
-    loop = (encloses >= config.REJECT_RIM_LOOP_PX) & (hole_lift >= config.REJECT_RIM_HOLE_LIFT)
+    # objects whose grain-rim verdict rests on rim_share: a bright loop, large for the
+    # object, not reaching the void, judged
+    loop = (encloses >= config.REJECT_RIM_LOOP_PX) & (hole_lift >= config.REJECT_RIM_HOLE_LIFT) \
+        & (encloses >= config.REJECT_RIM_HOLE_SHARE * area) \
+        & (side_depth < config.REJECT_ZONE_MAX_DEPTH) & (area >= config.REJECT_MIN_AREA_PX)
     if loop.any():
         # share of the object that hugs a hole: within its own width (+1.5 px) of one (only
-        # for objects closing a bright loop, the ones the grain-rim rule judges). The
+        # for those objects: the other rules never read it). The
         # distance is read in the object's box widened by its reach: a chamfer path of k
         # steps is >= 0.955 k long, so that box holds every path short enough to pass (the
         # same verdicts as distances over the whole image)
@@ -332,16 +337,22 @@ def object_evidence(labels, n, grey, *, crack_level, noise, skeleton=None, regio
     # wide enough shows its core grey, whatever the blur); depths are read against the void
     # grey the areas use (the crack grey is a guess when no crack shows a plateau)
     dist = cv2.distanceTransform(on.view(np.uint8), cv2.DIST_L2, 3)
-    inner = dist >= config.REJECT_BAND_INTERIOR_PX
-    lab_in = lab[inner].astype(np.int64)
+    rr, cc = pixel_coords(dist >= config.REJECT_BAND_INTERIOR_PX)
+    lab_in = lab.ravel()[rr * w + cc].astype(np.int64)
     interior_share = np.bincount(lab_in, minlength=n + 1)[:n + 1] / np.maximum(area, 1.0)
-    in_core = _label_percentiles(g[inner], lab_in, n, (20.0,), std=False)[0][0]
+    gf = g.ravel()
+    in_core = _label_percentiles(gf[rr * w + cc], lab_in, n, (20.0,), std=False)[0][0]
     # the grey standard deviation of each interior pixel's 5 x 5 window (read there only)
-    rr, cc = pixel_coords(inner)
-    d = np.arange(-2, 3)
-    win = g[np.clip(rr[:, None, None] + d[:, None], 0, h - 1),
-            np.clip(cc[:, None, None] + d[None, :], 0, w - 1)].reshape(rr.size, d.size ** 2)
-    interior_rough = _label_percentiles(win.std(axis=1), lab_in, n, (50.0,),
+    at = np.clip(rr, 2, h - 3) * w + np.clip(cc, 2, w - 3)
+    centre = gf[at]   # sums of differences from it: no cancellation in float32
+    s1 = np.zeros(at.size, np.float32)
+    s2 = np.zeros(at.size, np.float32)
+    for off in (np.arange(-2, 3)[:, None] * w + np.arange(-2, 3)).ravel():
+        v = gf[at + off] - centre
+        s1 += v
+        s2 += v * v
+    local_sd = np.sqrt(np.maximum(s2 / 25 - (s1 / 25) ** 2, 0.0))
+    interior_rough = _label_percentiles(local_sd, lab_in, n, (50.0,),
                                         std=False)[0][0] / max(float(noise), 1e-6)
     void = float(crack_level if void_level is None or not np.isfinite(void_level)
                  else void_level)

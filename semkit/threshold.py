@@ -435,12 +435,14 @@ def _void_components(dark, flat, flat_at, noise, mineral, step=1, components=Non
             # partial volumes are brighter than the void, never darker: dark pixels (not
             # pores) well below the darkest plateau show a darker void, and the plateaus
             # are a dark phase
-            low = (np.asarray(grey) < void - band) & (comp > 0)
-            low &= ~pore[comp]
-            n_low = np.count_nonzero(low)
-            if n_low * s2 >= config.VOID_PLATEAU_MIN_PX and n_low >= config.VOID_UNDERCUT_SHARE \
-                    * np.count_nonzero((comp > 0) & ~pore[comp]):
-                below = np.asarray(grey)[low]
+            gv = np.asarray(grey).ravel()
+            at = np.flatnonzero(gv < void - band)
+            c = comp.ravel()[at]
+            at = at[(c > 0) & ~pore[c]]
+            open_px = float(area[1:][~pore[1:]].sum())
+            if at.size * s2 >= config.VOID_PLATEAU_MIN_PX \
+                    and at.size >= config.VOID_UNDERCUT_SHARE * open_px:
+                below = gv[at]
     if below.size:
         return np.zeros(len(flat), bool), 1.0, below
     if keep[lab].all():
