@@ -22,10 +22,10 @@ SHARED = real.shared_dir()
 pytestmark = pytest.mark.skipif(not (SHARED / "rock_microct_311H").is_dir(),
                                 reason=f"real images not present ({SHARED}; set ROCKKIT_SHARED)")
 
-#: measured 0.848 on the 30 held-out slices; the issue's target (0.85, on all 40) is not
-#: reached. It was 0.855 before the grain-rim rule was kept off crack networks that close one
-#: loop around a grain (``rim_share``): two held-out halos with attached lines now pass
-MICROCT_F1_MEDIAN_MIN = 0.84
+#: measured 0.867 on the 30 held-out slices (0.848 before the void grey was read below
+#: plateaus that the fracture's cores undercut); the issue's target (0.85 on all 40) is not
+#: reached: 0.836 there
+MICROCT_F1_MEDIAN_MIN = 0.86
 #: the issue's targets, reached: length within 15 % (median), no area above 2x the painting
 MICROCT_LENGTH_TOL = 0.15
 MICROCT_AREA_RATIO_MAX = 2.0
