@@ -327,8 +327,9 @@ LINK_EDGE_KAPPA = 1.0
 #: marked cracks, micro-CT slices 1-10 and semkit.synth seeds 11-16; docs/semkit.md)
 LINK_SNR = 4.0
 #: objects rejected by these rules of the first pass (their surroundings say they are no
-#: crack, or they are a dark phase's band) are kept out of linking; objects rejected for their own shape (phase_rim,
-#: compact_dark: a bead too round or short on its own) and pores may be passed through
+#: crack, or they are a dark phase's band) are kept out of linking; objects rejected for
+#: their own shape (phase_rim, compact_dark: a bead too round or short on its own) and pores
+#: may be passed through
 LINK_EXCLUDE_RULES = ("dark_phase", "mottled", "grain_rim", "dark_band")
 #: lines keep this far (px) from an excluded object (more than the 1-px gap that
 #: cleanup.bridge_gaps closes), so they never join one
