@@ -183,7 +183,10 @@ def dark_class_levels(image) -> DarkLevels:
     holding at least ``MINERAL_MIN_FRACTION`` of the pixels is the darkest mineral. Its level
     and noise sigma (half-maximum on the dark side / 1.1774) are then read on the histogram
     of the image itself. Pixels below ``mineral - DARK_TAIL_SIGMAS * sigma`` form the dark
-    class; the crack core level is the mode of that tail (the epoxy/void grey).
+    class; the crack core level is the median of its interior pixels when some crack shows a
+    plateau (flat core), else assumed from the tail's mode (the epoxy/void grey). Plateaus
+    that the cores of thinner cracks undercut are a dark phase's (``phase_plateaus``): the
+    crack grey is then read on those cores (:func:`_void_components`).
     """
     import cv2
 
@@ -394,15 +397,25 @@ def _void_components(dark, flat, flat_at, noise, mineral, step=1, components=Non
     mineral-to-void contrast, whichever is larger) are a dark phase (laths of a dark mineral),
     not open cracks.
 
+    With ``grey`` (the image ``dark`` was taken from, at its scale), the darkest plateau is
+    checked too: partial volumes are brighter than the void, never darker, so when at least
+    ``VOID_UNDERCUT_SHARE`` of the non-pore dark pixels (and ``VOID_PLATEAU_MIN_PX`` at the
+    full scale) lie more than the band below it, no plateau holds the void: all are a dark
+    phase's, and those darker pixels are returned.
+
     ``components`` may pass ``cv2.connectedComponents(dark, connectivity=8)`` when the caller
     has it already.
 
     Returns
     -------
     keep : (len(flat),) ndarray of bool or None
-        Which flat-core pixels hold the void; None when every pixel does.
+        Which flat-core pixels hold the void; None when every pixel does (all False when the
+        plateaus are undercut).
     phase_share : float
-        Share of the flat-core pixels on the brighter plateaus (0 when none).
+        Share of the flat-core pixels on the brighter plateaus (0 when none; 1 when every
+        plateau is undercut).
+    below : ndarray of float32
+        Grey of the dark pixels under every plateau (empty unless they undercut them).
     """
     import cv2
 
