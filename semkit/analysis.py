@@ -184,6 +184,12 @@ class CrackAnalysis:
             raise InputError(f"{self.name or 'image'}: image is uniform (no contrast)")
         return crack_mask(img, method=self.options.threshold)
 
+    @property
+    def _threshold(self):
+        """:attr:`thresholded`, or None with a segmenter (its decision replaces the threshold's
+        levels and background)."""
+        return None if self.options.segmenter is not None else self.thresholded
+
     @functools.cached_property
     def ridge(self):
         """``(mask, depth)`` of thin dark lines (:func:`semkit.ridge.ridge_mask`), or None
@@ -337,7 +343,7 @@ class CrackAnalysis:
                         skeleton=self.skeleton if self.options.length else None,
                         area_mask=self.area_mask, image_name=self.name)
         t["area_method"] = "count"
-        th = None if self.options.segmenter is not None else self.thresholded
+        th = self._threshold
         if th is None or th.background is None or not len(t):
             return t
         px = self.pixel_size_um
@@ -373,7 +379,7 @@ class CrackAnalysis:
     @functools.cached_property
     def crack_level(self):
         """Crack core grey (the ``auto`` threshold's, else the dark-class analysis's)."""
-        t = None if self.options.segmenter is not None else self.thresholded
+        t = self._threshold
         if t is not None and np.isfinite(t.crack_level):
             return float(t.crack_level)
         from .threshold import dark_class_levels
@@ -384,7 +390,7 @@ class CrackAnalysis:
     def _object_evidence(self, labels, n, relief=None):
         from .reject import object_evidence
         from .threshold import noise_sigma
-        t = None if self.options.segmenter is not None else self.thresholded
+        t = self._threshold
         return object_evidence(labels, n, self.smooth, crack_level=self.crack_level,
                                noise=noise_sigma(self.smooth),
                                void_level=None if t is None else t.void_level,
@@ -484,7 +490,7 @@ class CrackAnalysis:
             return self.cracks
         from .classify import classify_stage, load_model
         model = load_model(self.options.crack_model) if self.options.crack_model else None
-        th = None if self.options.segmenter is not None else self.thresholded
+        th = self._threshold
         return classify_stage(self.cracks, self.crack_labels, grey=self.smooth,
                               pixel_size_um=self.pixel_size_um, model=model,
                               post=self.typing_post,
