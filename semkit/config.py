@@ -410,7 +410,7 @@ REJECT_ZONE_MAX_DEPTH = 0.85
 #: REJECT_BAND_INTERIOR_PX or more inside it (wide enough to show its core grey through any
 #: blur); that interior's dark core lies less than REJECT_BAND_DEPTH of the way from the darker
 #: side around it to the void grey; it is smooth (median 5 x 5 grey standard deviation under
-#: REJECT_BAND_MAX_ROUGH noise sigmas: flat mineral ~1.3; the drawn family's laths 0.4-3.8; its
+#: REJECT_BAND_MAX_ROUGH noise sigmas: flat mineral ~1.0-1.2; the drawn family's laths 0.4-3.8; its
 #: cracks as shallow, with debris or merged layers inside, 6.8-26); and it is darkest inside
 #: (its whole dark core less than REJECT_BAND_MAX_WALL below the interior's: laths -0.09-0.00;
 #: a development crack with dark walls and a grey middle 0.11, most shallow drawn cracks more)
