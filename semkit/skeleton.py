@@ -115,18 +115,42 @@ def prune_spurs(skel, mask, *, half_widths=config.SPUR_HALF_WIDTHS,
     return pad[1:-1, 1:-1].astype(bool)
 
 
+def _checked(skel, labels, n_labels):
+    """``skel`` and ``labels`` as contiguous bool and int32 arrays, or ``ValueError`` when
+    their shapes differ or a skeleton pixel's label falls outside ``0 .. n_labels - 1`` (the
+    kernels index their outputs by label)."""
+    skel = np.ascontiguousarray(skel, np.bool_)
+    labels = np.ascontiguousarray(labels, np.int32)
+    if skel.shape != labels.shape:
+        raise ValueError(f"skel {skel.shape} and labels {labels.shape}: expected one shape")
+    on = labels[skel]
+    if on.size and (on.min() < 0 or on.max() >= n_labels):
+        raise ValueError(f"n_labels = {n_labels}: expected the highest label on the skeleton "
+                         f"+ 1 or more (highest {on.max()}, lowest {on.min()} >= 0)")
+    return skel, labels
+
+
 def chain_counts(skel, labels, n_labels):
     """Even (straight) links, odd (diagonal) links and corners of each object's skeleton.
+
+    Parameters
+    ----------
+    skel : (M, N) bool
+        Thin skeleton.
+    labels : (M, N) int32
+        Object labels (0 = background).
+    n_labels : int
+        Highest label + 1 (a smaller value raises ``ValueError``).
 
     Returns
     -------
     n_straight, n_diag, n_corner : (n_labels,) ndarray of int64
     """
+    skel, labels = _checked(skel, labels, n_labels)
     ns = np.zeros(n_labels, np.int64)
     nd = np.zeros(n_labels, np.int64)
     nc = np.zeros(n_labels, np.int64)
-    _kernels.chain_links(np.ascontiguousarray(skel, np.bool_),
-                         np.ascontiguousarray(labels, np.int32), n_labels, ns, nd, nc)
+    _kernels.chain_links(skel, labels, n_labels, ns, nd, nc)
     return ns, nd, nc
 
 
@@ -167,6 +191,7 @@ def skeleton_length(skel, labels, n_labels, *, estimator="corner"):
     elif estimator == "sqrt2":
         a, b, c = 1.0, np.sqrt(2.0), 0.0
     elif estimator == "count":
+        skel, labels = _checked(skel, labels, n_labels)
         npx = np.bincount(labels[skel], minlength=n_labels).astype(np.float64)
         npx[0] = 0
         return npx

@@ -83,6 +83,20 @@ def test_chain_counts_hand_made():
     assert tuple(int(v[1]) for v in chain_counts(t, t.astype(np.int32), 2)) == (2, 0, 1)
 
 
+
+@pytest.mark.parametrize("estimator", ["corner", "count"])
+def test_too_few_labels_raise_instead_of_writing_past_the_counts(estimator):
+    # n_labels is the highest label + 1; the highest label alone once wrote past the kernel's
+    # output arrays (heap corruption, a crash later)
+    s = np.zeros((5, 9), bool)
+    s[2, 1:8] = True
+    lab = s.astype(np.int32) * 3
+    with pytest.raises(ValueError, match="n_labels = 3"):
+        skeleton_length(s, lab, 3, estimator=estimator)
+    with pytest.raises(ValueError, match="one shape"):
+        chain_counts(s, lab[:, :5], 4)
+    assert skeleton_length(s, lab, 4, estimator=estimator)[3] > 5.5
+
 def test_spurs_pruned_real_branches_kept():
     m = stadium(160, 7, 0.0, shape=(120, 220))
     m[63:67, 100] = True  # a 1-px bump on the edge -> spur
