@@ -608,6 +608,15 @@ class CrackAnalysis:
             notes.append(f"faint lines: {faint:.0%} of the crack length lies less than "
                          f"{config.FAINT_LINE_DEPTH:g} of the crack contrast below its "
                          "surroundings (grain boundaries or faint cracks): check the overlay")
+        speck = self._speckle_length_share()
+        if speck >= config.SPECKLE_MAX_LENGTH_SHARE:
+            win = config.ZONE_NEIGHBOUR_WINDOW_PX
+            notes.append(f"specks: {speck:.0%} of the crack length lies in short objects "
+                         f"(under {config.SPECKLE_MAX_LENGTH_PX:g} px) with "
+                         f"{config.SPECKLE_MIN_NEIGHBOURS} or more others in the "
+                         f"{win} x {win} px window around them: a speckled texture (dusty "
+                         "or altered grains, inclusions), not a crack pattern: check the "
+                         "overlay")
         cont = self._continuation_share()
         if cont >= config.CONTINUATION_MAX_SHARE:
             notes.append(f"faint continuations: ridge lines carry on from the detected cracks "
@@ -654,6 +663,22 @@ class CrackAnalysis:
         length = c["length_px"].to_numpy()
         total = float(length.sum())
         return float(length[depth < config.FAINT_LINE_DEPTH].sum()) / total if total > 0 else 0.0
+
+    def _speckle_length_share(self):
+        """Share of the crack length in short objects (skeleton under
+        ``SPECKLE_MAX_LENGTH_PX``) with ``SPECKLE_MIN_NEIGHBOURS`` or more other objects
+        around them (``neighbours`` of :func:`semkit.reject.object_evidence`); 0 when the
+        rejection rules are off (no evidence is measured then). Cracks, even a network with
+        its debris, are few long objects; specks in a dusty or altered grain are many short
+        ones together."""
+        if not self.options.reject or self.cracks.empty or not self.options.length:
+            return 0.0
+        c = self.cracks
+        length = c["length_px"].to_numpy(float)
+        crowd = self.evidence["neighbours"].reindex(c["crack_id"]).to_numpy()
+        short = (length < config.SPECKLE_MAX_LENGTH_PX) & (crowd >= config.SPECKLE_MIN_NEIGHBOURS)
+        total = float(length.sum())
+        return float(length[short].sum()) / total if total > 0 else 0.0
 
     def _continuation_share(self):
         """Pixels of ridge lines that touch a detected object but run on more than 2 px

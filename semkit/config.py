@@ -429,6 +429,15 @@ REJECT_MAX_ZONE_SHARE = 0.2
 #: semkit.synth 1-px cracks 7-8 %, micro-CT tuning slices <= 4 %)
 FAINT_LINE_DEPTH = 0.2
 FAINT_MAX_LENGTH_SHARE = 0.2
+#: an image with at least SPECKLE_MAX_LENGTH_SHARE of its crack length in short objects
+#: (skeleton under SPECKLE_MAX_LENGTH_PX) with SPECKLE_MIN_NEIGHBOURS or more other objects
+#: in the ZONE_NEIGHBOUR_WINDOW_PX window around them is flagged: a speckled texture (dusty or
+#: altered grains, fluid inclusions, pitted surfaces), not a crack pattern (development and
+#: drawn families, micro-CT tuning slices, sample images: 0; the cracked dolomite
+#: micrographs <= 0.041; plane-light sandstone thin sections 0.15-0.36)
+SPECKLE_MAX_LENGTH_PX = 25.0
+SPECKLE_MIN_NEIGHBOURS = 8
+SPECKLE_MAX_LENGTH_SHARE = 0.1
 #: an image whose ridge lines continue its detected cracks (pixels of a ridge line touching a
 #: crack, more than 2 px from every detected pixel) for at least this many px per px of crack
 #: length is flagged: the cracks were found only in part (development family: the under-read

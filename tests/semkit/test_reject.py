@@ -139,6 +139,36 @@ def test_an_image_whose_length_is_mostly_faint_lines_is_flagged():
     assert "faint lines" not in analyse_image(thin.image).summary()["valid_note"]
 
 
+
+def test_an_image_whose_cracks_are_mostly_crowded_specks_is_flagged():
+    """A dusty grain (500 dark dashes 6-16 px long in a 400 x 400 px patch, as the dusty
+    feldspars of a plane-light thin section) adds some 240 objects that pass every rule: the
+    row would be valid with twenty times the cracks. 40 % of its crack length lies in short
+    objects with 8 or more others around them, so it is flagged; the clean image (cracks:
+    few, long) has none."""
+    import cv2
+
+    from semkit.analysis import analyse_image
+    from semkit.synth import make_sem_image
+    s = make_sem_image((768, 1024), stage="post", seed=1, n_cracks=8)
+    clean = analyse_image(s.image, pixel_size_um=s.pixel_size_um, classify=False)
+    assert clean.summary()["valid"] and clean._speckle_length_share() == 0.0
+    rng = np.random.default_rng(0)
+    dust = np.zeros(s.image.shape, np.float32)
+    for _ in range(500):
+        x, y = rng.uniform(100, 500, 2)
+        length, th = rng.uniform(6, 16), rng.uniform(0, np.pi)
+        cv2.line(dust, (int(x), int(y)),
+                 (int(x + length * np.cos(th)), int(y + length * np.sin(th))), 1.0, 1)
+    dust = cv2.GaussianBlur(dust, (0, 0), 0.7)
+    img = np.clip(s.image * (1.0 - dust) + 35.0 * dust, 0, 255).astype(np.uint8)
+    dusty = analyse_image(img, pixel_size_um=s.pixel_size_um, classify=False)
+    row = dusty.summary()
+    assert row["n_cracks"] > 10 * clean.summary()["n_cracks"]
+    assert 0.3 <= dusty._speckle_length_share() <= 0.6
+    assert not row["valid"] and row["valid_note"].startswith("specks: ")
+    assert "; " not in row["valid_note"]  # the one reason: valid without the flag
+
 def test_rim_share_tells_a_ring_from_a_network_that_closes_one_loop():
     """A shallow 3-px ring around a bright disc (a halo) hugs its hole whole and is the disc's
     rim; the same ring with a long crack running on from it hugs it with half of its pixels
