@@ -88,8 +88,16 @@ class CrackAnalysis:
         img = to_grey(np.asarray(image))
         if img.ndim != 2 or img.size == 0:
             raise InputError(f"{name or 'image'}: expected a non-empty 2-D image")
-        if not np.isfinite(img).all() if img.dtype.kind == "f" else False:
-            raise InputError(f"{name or 'image'}: image holds NaN or inf")
+        self._no_data = None
+        if img.dtype.kind == "f" and not np.isfinite(img).all():
+            # NaN / inf pixels hold no data (a CT export's outside, a masked stitch): outside
+            # the sample region, filled with the finite median until the region fills them
+            finite = np.isfinite(img)
+            if not finite.any():
+                raise InputError(f"{name or 'image'}: image holds no finite pixel (all NaN "
+                                 "or inf)")
+            self._no_data = ~finite
+            img = np.where(finite, img, np.median(img[finite])).astype(img.dtype)
         if not pixel_size_um > 0:
             raise InputError(f"pixel_size_um: expected > 0, got {pixel_size_um}")
         from .io import working_grey
@@ -117,20 +125,27 @@ class CrackAnalysis:
         c = crop_data_bar(self.raw_image, pixel_size_um=self.pixel_size_um,
                           pixel_size_source=self.pixel_size_source)
         self.image, self.data_bar, self.scale_bar = c.image, c.bar, c.scale_bar
+        if self._no_data is not None and c.bar is not None:
+            b = c.bar
+            self._no_data = self._no_data[b.row1:] if b.side == "top" else \
+                self._no_data[:b.row0]
         self.pixel_size_um, self.pixel_size_source = c.pixel_size_um, c.pixel_size_source
         self.pixel_size_note = c.note
 
     # stage 1c: sample region
     @functools.cached_property
     def region(self):
-        """The sample region (:class:`semkit.roi.SampleRegion`) of ``image``."""
-        from .roi import SampleRegion, find_sample_region, read_roi_mask
+        """The sample region (:class:`semkit.roi.SampleRegion`) of ``image``; pixels that
+        hold no data (NaN or inf in a float image) are outside it, whatever ``roi``."""
+        from .roi import SampleRegion, find_sample_region, read_roi_mask, without_no_data
         roi = self.options.roi
         if roi == "none":
-            return SampleRegion(np.ones(self.image.shape, bool), "none", 1.0)
-        if roi != "auto":
-            return read_roi_mask(roi, self.image.shape)
-        return find_sample_region(self.image)
+            r = SampleRegion(np.ones(self.image.shape, bool), "none", 1.0)
+        elif roi != "auto":
+            r = read_roi_mask(roi, self.image.shape)
+        else:
+            r = find_sample_region(self.image)
+        return r if self._no_data is None else without_no_data(r, self._no_data)
 
     @functools.cached_property
     def _work_image(self):

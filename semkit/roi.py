@@ -25,7 +25,7 @@ from . import config
 from .errors import InputError
 
 __all__ = ["SampleRegion", "find_sample_region", "find_annotations", "read_roi_mask",
-           "fill_outside", "parse_roi"]
+           "without_no_data", "fill_outside", "parse_roi"]
 
 
 @dataclasses.dataclass
@@ -38,8 +38,9 @@ class SampleRegion:
         True inside the sample.
     kind : str
         ``full`` (no surround found), ``surround`` (black or white surround removed),
-        ``annotation`` (only burned-in annotations removed), ``user`` (a mask file) or
-        ``none`` (``--roi none``).
+        ``annotation`` (only burned-in annotations removed), ``user`` (a mask file),
+        ``none`` (``--roi none``) or ``no_data`` (only the NaN or inf pixels of a float image
+        left out).
     fraction : float
         Share of the image inside.
     ok : bool
@@ -71,6 +72,26 @@ def _finish(mask, kind, note=""):
     if not ok:
         note = "; ".join(t for t in (note, f"sample region only {frac:.0%} of the image") if t)
     return SampleRegion(mask, kind, frac, ok, note)
+
+
+def without_no_data(region, no_data):
+    """``region`` less the pixels that hold no data (NaN or inf in a float image).
+
+    Parameters
+    ----------
+    region : SampleRegion
+    no_data : (M, N) ndarray of bool
+
+    Returns
+    -------
+    SampleRegion
+        Its kind is ``no_data`` where the region was the whole image (``full`` or ``none``);
+        the note says how much of the image holds no data.
+    """
+    mask = region.mask & ~np.asarray(no_data, bool)
+    kind = "no_data" if region.kind in ("full", "none") else region.kind
+    note = f"{float(np.mean(no_data)):.0%} of the image holds no data (NaN or inf): left out"
+    return _finish(mask, kind, "; ".join(t for t in (region.note, note) if t))
 
 
 def find_annotations(image):

@@ -143,6 +143,34 @@ def test_user_roi_mask(tmp_path):
     assert os.path.exists(tmp_path / "roi.png")
 
 
+
+@pytest.mark.parametrize("roi", ["auto", "none"])
+def test_pixels_without_data_are_outside_the_sample(tmp_path, roi):
+    """A float image whose outside is NaN (a CT export, a masked mosaic) reads as the same
+    image with that outside given as a mask; before, it was refused ("holds NaN or inf").
+    Scattered NaN pixels (dead pixels) are left out and never become cracks."""
+    from semkit.errors import InputError
+    s = make_sem_image((300, 300), n_cracks=5, widths=(3, 6), seed=11)
+    yy, xx = np.mgrid[:300, :300]
+    core = (yy - 150) ** 2 + (xx - 150) ** 2 < 140 ** 2
+    img = np.where(core, s.image.astype(np.float32), np.nan)
+    img[40:44, 150:154] = np.inf  # dead pixels inside
+    inside = core & ~((yy >= 40) & (yy < 44) & (xx >= 150) & (xx < 154))
+    cv2.imwrite(str(tmp_path / "roi.png"), inside.astype(np.uint8) * 255)
+    a = analyse_image(img, pixel_size_um=1.0, roi=roi)
+    row = a.summary()
+    assert row["roi"] == "no_data" and row["roi_ok"]
+    assert row["image_area_um2"] == pytest.approx(inside.sum())
+    assert not (a.crack_labels[~inside] > 0).any()
+    ref = analyse_image(s.image.astype(np.float32), pixel_size_um=1.0,
+                        roi=str(tmp_path / "roi.png")).summary()
+    for k in ("crack_area_um2", "crack_length_um", "n_cracks", "valid"):
+        assert row[k] == pytest.approx(ref[k]), k
+    truth = (s.crack_mask & core).sum()
+    assert row["crack_area_um2"] == pytest.approx(truth, rel=0.15)
+    with pytest.raises(InputError, match="no finite pixel"):
+        analyse_image(np.full((50, 50), np.nan, np.float32))
+
 def test_unreadable_label_is_not_used_and_is_said():
     """A small serif label the template OCR cannot read: the bar is still cropped, the pixel
     size stays as given (default) and the row says why."""
