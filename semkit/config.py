@@ -397,6 +397,15 @@ REJECT_DARK_BACKGROUND = 0.4
 LONE_LINE_MAX_NEIGHBOURS = 1
 LONE_LINE_ELONGATION = 5.0
 LONE_LINE_DEPTH = 0.4
+#: ... or, curved, at least this slender (skeleton length over mean width) and winding at
+#: most this much (skeleton length over its bounding box's diagonal): a bent or wavy crack's
+#: moments are not elongated, and it is one path (development images 2, 6 and 12 and the
+#: polyline family's seed 23: cracks in darker minerals of slenderness 37-84, elongation 1.2-4.3,
+#: winding 0.97-1.68, were rejected). A dark grain's cleavage traces joined into one object
+#: wind to and fro (a test grain: 2.7); no object of the micro-CT tuning slices, granite or
+#: dolomite micrographs that the rule rejects alone in its window is slenderer than 10
+LONE_LINE_SLENDERNESS = 30.0
+LONE_LINE_MAX_WINDING = 2.0
 #: mottled, altered area: local background below this share, and at least this share of the
 #: window around the object detected
 REJECT_MOTTLED_BACKGROUND = 0.8

@@ -26,7 +26,9 @@ Every cleaned object gets a few measures (:func:`object_evidence`):
   on elsewhere (less than ``REJECT_RIM_MIN_SHARE``: not a rim, however bright the grain).
 * ``elongation`` — sqrt of the ratio of the principal second moments (1 for a disc).
 * ``width_px`` — mean width, area over skeleton length; ``slenderness`` — skeleton length
-  over mean width (a curved crack is slender even when its moments are not elongated).
+  over mean width (a curved crack is slender even when its moments are not elongated);
+  ``winding`` — skeleton length over the diagonal of the object's bounding box (~1 for one
+  path, bent or branched a little; 2.5 and more for a network of traces to and fro).
 * ``background_rel`` — the object's median local background (a 21-px grey closing, on the
   image shrunk by 2, which fills every crack narrower than that) relative to the rock's (75th
   percentile of that closing), both measured from the crack core grey: ~1 for a crack in a
@@ -52,8 +54,8 @@ Every cleaned object gets a few measures (:func:`object_evidence`):
 An object whose dark core reaches the crack core grey (``side_depth`` at least
 ``REJECT_ZONE_MAX_DEPTH``: an open, void- or epoxy-filled crack) is never rejected for its
 zone: a crack through a dark or mottled grain stays a crack. Nor is a lone line
-(:func:`kept_lone_lines`: straight, deep for its zone, no other object around it) rejected as
-``dark_phase``: a crack in a darker mineral, not the grain's texture.
+(:func:`kept_lone_lines`: straight or slender, deep for its zone, no other object around it)
+rejected as ``dark_phase``: a crack in a darker mineral, not the grain's texture.
 
 :func:`reject_objects` applies the rules (:data:`RULES`, thresholds in :mod:`semkit.config`)
 and returns the reason per object (``""`` for a crack). Rejected objects stay in
@@ -71,10 +73,13 @@ __all__ = ["object_evidence", "reject_objects", "split_zone_objects", "zone_reli
 
 
 def _lone_line(e):
-    """A straight line with no other object around it, deep for its zone: a crack in a dark
-    grain, not the grain's cleavage, boundaries or texture (which come many together)."""
+    """A line (straight, or curved and slender along one path) with no other object around
+    it, deep for its zone: a crack in a dark grain, not the grain's cleavage, boundaries or
+    texture (which come many together, or joined into a network that winds to and fro)."""
     return ((e.neighbours <= config.LONE_LINE_MAX_NEIGHBOURS)
-            & (e.elongation >= config.LONE_LINE_ELONGATION)
+            & ((e.elongation >= config.LONE_LINE_ELONGATION)
+               | ((e.slenderness >= config.LONE_LINE_SLENDERNESS)
+                  & (e.winding <= config.LONE_LINE_MAX_WINDING)))
             & (e.side_depth >= config.LONE_LINE_DEPTH))
 
 
@@ -250,7 +255,8 @@ def object_evidence(labels, n, grey, *, crack_level, noise, skeleton=None, regio
     -------
     evidence : pandas.DataFrame
         Index 1..n: ``area_px, side_depth, side_step, encloses_px, hole_lift, rim_share,
-        elongation, width_px, slenderness, background_rel, density, neighbours, texture,
+        elongation, width_px, slenderness, winding, background_rel, density, neighbours,
+        texture,
         interior_share, interior_depth, interior_rough, wall_depth``.
     """
     import cv2
@@ -276,6 +282,7 @@ def object_evidence(labels, n, grey, *, crack_level, noise, skeleton=None, regio
         skeleton = skeletonize(lab > 0)
     sk = np.bincount(lab[np.asarray(skeleton, bool)], minlength=n + 1).astype(float)
     width = area / np.maximum(sk, 1.0)
+    winding = sk / np.maximum(np.hypot(bw, bh), 1.0)
     # the zone around the object: local background and detection density
     h, w = g.shape
     if relief is None:
@@ -362,7 +369,7 @@ def object_evidence(labels, n, grey, *, crack_level, noise, skeleton=None, regio
     ev = pd.DataFrame(dict(area_px=area, side_depth=side_depth, side_step=side_step,
                            encloses_px=encloses, hole_lift=hole_lift, rim_share=rim_share,
                            elongation=elong, width_px=width,
-                           slenderness=sk / np.maximum(width, 1e-9),
+                           slenderness=sk / np.maximum(width, 1e-9), winding=winding,
                            background_rel=background_rel, density=density,
                            neighbours=neighbours, texture=texture,
                            interior_share=interior_share, interior_depth=interior_depth,
