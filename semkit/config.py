@@ -393,10 +393,13 @@ REJECT_DARK_BACKGROUND = 0.4
 #: ... except a lone line: at most this many other objects in its window (``neighbours``), at
 #: least this elongated, and its core at least this share of the contrast below its darker
 #: side (development images 10 and 12: 20 of 26 rejected objects were cracks in darker
-#: minerals, each alone in its window; the granite's dark-grain objects have 2-17 around them)
+#: minerals, each alone in its window; the granite's dark-grain objects have 2-17 around them,
+#: the one with one around it 0.19 deep). Depth from 0.25: cracks thinner than the blur read
+#: 0.25-0.4 (development, polyline and drawn families: 11 of the 13 lone lines at that depth
+#: were cracks, one a dark lath; no real image's object at that depth is a lone line)
 LONE_LINE_MAX_NEIGHBOURS = 1
 LONE_LINE_ELONGATION = 5.0
-LONE_LINE_DEPTH = 0.4
+LONE_LINE_DEPTH = 0.25
 #: ... or, curved, at least this slender (skeleton length over mean width) and winding at
 #: most this much (skeleton length over its bounding box's diagonal): a bent or wavy crack's
 #: moments are not elongated, and it is one path (development images 2, 6 and 12 and the

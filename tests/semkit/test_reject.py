@@ -56,25 +56,30 @@ def test_a_lone_line_in_a_dark_zone_is_a_crack_and_counted_as_judged():
     """Cracks in a darker mineral (development images 10, 12: background 0.16-0.40 of the
     rock's, alone in their window, elongation 5-16) were rejected as ``dark_phase`` with the
     grain's texture; a lone line deep for its zone, straight or (curved) slender, is now kept
-    (development images 2 and 12: bent cracks of slenderness 37-63, elongation 1.2-1.9). A
-    dark grain's streaks come several together (granite: 2-17 around each) or are short
-    (slenderness <= 10 on the real images) or shallow, and stay rejected; the kept lines count
-    as judged by the rules in the rejection flag."""
+    (development images 2 and 12: bent cracks of slenderness 37-63, elongation 1.2-1.9), and
+    from 0.25 of the contrast deep (a blurred 1-px crack in a dark grain of the polyline
+    family reads 0.30). A dark grain's streaks come several together (granite: 2-17 around
+    each) or are short (slenderness <= 10 on the real images) or shallow (the granite's one
+    with a single neighbour: 0.19), and stay rejected; the kept lines count as judged by the
+    rules in the rejection flag."""
     from semkit.reject import kept_lone_lines
     line = dict(side_depth=0.58, background_rel=0.39, slenderness=8.0)
     ev = pd.DataFrame([
         _row(**line, elongation=10.5, neighbours=1),                      # a crack
         _row(**line, elongation=10.5, neighbours=3),                      # many
         _row(**line, elongation=2.8, neighbours=0),                       # short
-        _row(**{**line, "side_depth": 0.28, "slenderness": 40.0}, elongation=10.5,
+        _row(**{**line, "side_depth": 0.19, "slenderness": 40.0}, elongation=10.5,
              neighbours=0),                                               # shallow
         _row(**{**line, "background_rel": 0.9}, elongation=10.5, neighbours=0),  # clear rock
         _row(**{**line, "slenderness": 37.0}, elongation=1.9, neighbours=0),   # bent crack
         _row(**{**line, "slenderness": 37.0}, elongation=1.9, neighbours=4),   # many bent
-    ], index=[1, 2, 3, 4, 5, 6, 7])
+        _row(**{**line, "side_depth": 0.30, "slenderness": 87.0}, elongation=24.0,
+             neighbours=0),                                               # a blurred 1-px crack
+    ], index=[1, 2, 3, 4, 5, 6, 7, 8])
     why = reject_objects(ev)
-    assert list(why) == ["", "dark_phase", "dark_phase", "dark_phase", "", "", "dark_phase"]
-    assert list(kept_lone_lines(ev, why)) == [True, False, False, False, False, True, False]
+    assert list(why) == ["", "dark_phase", "dark_phase", "dark_phase", "", "", "dark_phase", ""]
+    assert list(kept_lone_lines(ev, why)) == [True, False, False, False, False, True, False,
+                                              True]
 
 
 @pytest.mark.parametrize("seed", [1, 2])
