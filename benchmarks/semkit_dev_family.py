@@ -7,8 +7,11 @@ in 60 % of images a dark mineral at 45-75 grey, grain size, pores, noise, blur, 
 on, so its errors here are not a general accuracy figure: that is the held-out generator's job
 (``benchmarks/heldout_semkit.py``, never tuned on). Each image is scored against its exact
 truth: total crack area (partial-volume coverage) and length errors, and whether semkit flags
-the image (``valid``). A *confidently wrong* image is one marked valid whose area or length is
-off by more than 25 %.
+the image (``valid``). Length is scored against the crack paths (``length_px``: a layered or
+stepped shear crack counted once, as ``semkit.synth`` counts it) and, for reference, against
+every drawn trace (``trace_length_px``: each layer and step, as the drawn-crack family and a
+skeleton of a perfect segmentation count it). A *confidently wrong* image is one marked valid
+whose area or length is off by more than 25 %.
 
 Writes ``benchmarks/semkit_results/dev_family.json`` and prints a markdown table.
 
@@ -55,8 +58,10 @@ def score_image(seed, shape=(768, 1024)):
     area = row["crack_area_um2"] / s.pixel_size_um ** 2
     length = row["crack_length_um"] / s.pixel_size_um
     at, lt = float(s.cracks["area_cov_px"].sum()), float(s.cracks["length_px"].sum())
+    tt = float(s.cracks["trace_length_px"].sum())
     return dict(seed=seed, area_true_px=at, area_px=area, area_err=area / at - 1,
                 length_true_px=lt, length_px=length, length_err=length / lt - 1,
+                trace_length_true_px=tt, trace_length_err=length / tt - 1,
                 n_cracks_true=len(s.cracks), n_cracks=row["n_cracks"],
                 valid=bool(row["valid"]), valid_note=row["valid_note"])
 
@@ -83,6 +88,11 @@ def main(argv=None):
     with ProcessPoolExecutor(args.jobs) as ex:
         rows = list(ex.map(score_image, range(1, args.n + 1)))
     s = summarise(rows)
+    te = np.array([r["trace_length_err"] for r in rows])
+    ok = np.array([r["valid"] for r in rows])
+    s.update(trace_length_err_median=float(np.median(np.abs(te))),
+             trace_length_err_median_valid=float(np.median(np.abs(te[ok]))) if ok.any()
+             else None, trace_length_err_signed_median=float(np.median(te)))
     OUT.mkdir(parents=True, exist_ok=True)
     meta = dict(machine=platform.machine(), cpus=os.cpu_count(), load=os.getloadavg())
     (OUT / "dev_family.json").write_text(json.dumps(dict(meta=meta, summary=s, per_image=rows),
@@ -93,6 +103,9 @@ def main(argv=None):
           f"{s['area_err_signed_median']:+.1%} |")
     print(f"| length | {s['length_err_median']:.1%} | {s['length_err_median_valid']:.1%} | "
           f"{s['length_err_signed_median']:+.1%} |")
+    print(f"| length (drawn traces) | {s['trace_length_err_median']:.1%} | "
+          f"{s['trace_length_err_median_valid']:.1%} | "
+          f"{s['trace_length_err_signed_median']:+.1%} |")
     print(f"\nvalid: {s['n_valid']} of {s['n_images']}; confidently wrong (valid, off by "
           f"> {WRONG:.0%}): {s['confidently_wrong'] or 'none'}")
     return 0

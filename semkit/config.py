@@ -313,6 +313,9 @@ RIDGE_LOW_SNR = 4.0
 RIDGE_MIN_DEPTH_FRACTION = 0.2
 #: side of the grey closing giving the local background of a ridge, px
 RIDGE_CLOSING_PX = 9
+#: a ridge line touching a threshold object adds its pieces beyond the object of at least
+#: this many px whose median depth is at least RIDGE_MIN_DEPTH_FRACTION (faint continuations)
+RIDGE_CONTINUATION_MIN_PX = 10
 
 # --- linking of faint, beaded cracks (semkit.link) ---
 #: oriented line response: Gaussian scale across and along the line, px, and the number of

@@ -153,13 +153,19 @@ def ridge_mask(image, *, crack_level, region=None, sigmas=config.RIDGE_SIGMAS_PX
     return mask, depth
 
 
-def add_ridge_lines(detect, area, ridge, depth, components=None):
+def add_ridge_lines(detect, area, ridge, depth, components=None, *,
+                    continuations=True, min_px=config.RIDGE_CONTINUATION_MIN_PX,
+                    min_depth=config.RIDGE_MIN_DEPTH_FRACTION, return_continuations=False):
     """Fuse ridge lines with a threshold's masks: lines the threshold missed become cracks.
 
-    Ridge lines touching a threshold object are left out, so the threshold's objects keep
-    their shape (and measured width); the others are added to the detect mask, and to the area
-    mask where they are at least ``AUTO_AREA_FRACTION`` deep (thin ones are measured by partial
-    volume later).
+    A ridge line apart from every threshold object is added whole. A line touching one is
+    not (the threshold's objects keep their shape and measured width), but its pieces beyond
+    the object are: the faint continuation of a crack the threshold found only in part. A
+    piece is added when it holds at least ``min_px`` pixels and its median depth is at
+    least ``min_depth`` (a ridge line may run on along a fainter grain boundary; a crack's
+    continuation is as deep as a line the ridge detector starts on). Added pixels go to the
+    detect mask, and to the area mask where they are at least ``AUTO_AREA_FRACTION`` deep
+    (thin ones are measured by partial volume later).
 
     Parameters
     ----------
@@ -171,10 +177,18 @@ def add_ridge_lines(detect, area, ridge, depth, components=None):
     components : tuple, optional
         ``(labels, keep)`` from ``ridge_mask(..., return_components=True)``: the lines are
         the kept components, so they need not be labelled again.
+    continuations : bool
+        Add the pieces of touching lines beyond the objects.
+    min_px : int
+    min_depth : float
+    return_continuations : bool
+        Also return the continuation pieces added.
 
     Returns
     -------
     detect, area : (M, N) ndarray of bool
+    added : (M, N) ndarray of bool
+        Only with ``return_continuations``: the continuation pieces.
     """
     import cv2
 
@@ -182,11 +196,29 @@ def add_ridge_lines(detect, area, ridge, depth, components=None):
     if components is None:
         n, lab = cv2.connectedComponents(ridge.view(np.uint8), connectivity=8)
         touch = np.zeros(n, bool)
+        keep = np.ones(n, bool)
     else:  # components not in the ridge mask count as touching: never new
         lab, keep = components
         touch = ~keep
+    keep = keep.copy()
+    keep[0] = False
     near = cv2.dilate(detect.view(np.uint8), np.ones((3, 3), np.uint8)).view(bool)
     touch[lab[near & ridge]] = True
     touch[0] = True
     new = _kernels.lookup(~touch, lab)
-    return detect | new, area | (new & (depth >= config.AUTO_AREA_FRACTION))
+    added = np.zeros(detect.shape, bool)
+    if continuations:
+        beyond = ridge & ~detect & _kernels.lookup(touch & keep, lab)
+        if beyond.any():
+            m, pieces = cv2.connectedComponents(beyond.view(np.uint8), connectivity=8)
+            at = pieces[beyond]
+            size = np.bincount(at, minlength=m)
+            from .reject import _label_percentiles
+            med = _label_percentiles(depth[beyond], at, m - 1, (50.0,), std=False)[0][0]
+            ok = (size >= min_px) & (med >= min_depth)
+            ok[0] = False
+            if ok.any():
+                added = _kernels.lookup(ok, pieces)
+                new |= added
+    out = detect | new, area | (new & (depth >= config.AUTO_AREA_FRACTION))
+    return (*out, added) if return_continuations else out
