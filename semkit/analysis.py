@@ -707,8 +707,7 @@ class CrackAnalysis:
         seed 10: 0.18; counting accepted cracks only, 0.07). The continuation pieces the
         ridge stage added (:func:`semkit.ridge.add_ridge_lines`) count as left out: they rest
         on the ridge response alone, and a grain boundary carries a line on as well as a
-        crack (a test image of 30-px grains: +99 % area, flagged at 0.10 with or without
-        them)."""
+        crack (a test image of 30-px grains: three boundary pieces added)."""
         if self.ridge is None or self.options.segmenter is not None \
                 or not self.options.length:
             return 0.0
