@@ -146,16 +146,15 @@ def _post_table(crack_labels, *, image=None, skeleton=None, background=None, cra
                                                    onehot, ok, note_obj, model=model)
         kg = onehot.argmax(axis=1)
         code[ids] = kg + 1
-    table = pd.DataFrame({
+    cols = {
         "crack_id": ids.astype(int), "type_post": np.array(TYPES)[kg],
         "confidence": pg[np.arange(len(ids)), kg], "p_tensile": pg[:, 0], "p_shear": pg[:, 1],
         "p_mixed": pg[:, 2], "type_post_ok": ok, "type_note": note_obj.astype(str),
         "frac_tensile": onehot[:, 0], "frac_shear": onehot[:, 1], "frac_mixed": onehot[:, 2],
         "tensile_fraction": pg[:, 0] / np.maximum(pg[:, 0] + pg[:, 1], 1e-12),
-        "group_id": group_of[ids].astype(int), "p_mean": D[at, len(FEATURE_NAMES)]})
-    for j, name in enumerate(FEATURE_NAMES):
-        table[name] = Fg[at, j]
-    return table, code
+        "group_id": group_of[ids].astype(int), "p_mean": D[at, len(FEATURE_NAMES)]}
+    cols.update({name: Fg[at, j] for j, name in enumerate(FEATURE_NAMES)})
+    return pd.DataFrame(cols), code
 
 
 def _type_by_pieces(lab, ids, group_of, long_groups, local, pg, onehot, ok, notes, *, model,

@@ -3,6 +3,7 @@ partial-volume areas added to one image's ``cracks.csv`` rows."""
 from __future__ import annotations
 
 import numpy as np
+import pandas as pd
 
 from ..damage_areas import typed_areas
 from .post import POST_COLUMNS, _post_table
@@ -65,9 +66,11 @@ def classify_stage(cracks, crack_labels, *, grey=None, pixel_size_um=1.0, model=
         t, _ = _post_table(lab, image=grey, skeleton=skeleton, background=background,
                            crack_level=crack_level, model=model)
         t = t.set_index("crack_id").reindex(ids)
-        for c in POST_COLUMNS:
-            out[c] = t[c].to_numpy()
-        out["type_post"] = t["type_post"].fillna("unknown").to_numpy()
+        new = {c: t[c].to_numpy() for c in POST_COLUMNS}
+        new["type_post"] = t["type_post"].fillna("unknown").to_numpy()
+        for c in [c for c in new if c in out.columns]:   # keep their place
+            out[c] = new.pop(c)
+        out = pd.concat([out, pd.DataFrame(new, index=out.index)], axis=1)
     elif len(out):
         out["type_post"] = "unknown"
     return out
