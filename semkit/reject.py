@@ -256,8 +256,7 @@ def object_evidence(labels, n, grey, *, crack_level, noise, skeleton=None, regio
     evidence : pandas.DataFrame
         Index 1..n: ``area_px, side_depth, side_step, encloses_px, hole_lift, rim_share,
         elongation, width_px, slenderness, winding, background_rel, density, neighbours,
-        texture,
-        interior_share, interior_depth, interior_rough, wall_depth``.
+        texture, interior_share, interior_depth, interior_rough, wall_depth``.
     """
     import cv2
 
