@@ -133,20 +133,26 @@ def test_dask_scheduler_and_two_workers_give_the_same_numbers(sweep_file, pool_r
 
 def test_ctrl_c_midway_then_rerun_computes_only_what_is_missing(sweep_file, pool_result,
                                                                  tmp_path):
-    out = tmp_path / "out"
-    cmd = [sys.executable, "-m", "sim", "sweep", str(sweep_file), "--out", str(out),
-           "--workers", "1", "--no-progress"]
-    # SIG_DFL in the child: a shell that starts jobs in the background ignores SIGINT
-    proc = subprocess.Popen(cmd, start_new_session=True, stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True,
-                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
-    deadline = time.monotonic() + 300
-    while time.monotonic() < deadline and proc.poll() is None:
-        if len(list((out / "runs").glob("*/row.json"))) >= 1:
+    for attempt in range(3):
+        out = tmp_path / f"out{attempt}"
+        cmd = [sys.executable, "-m", "sim", "sweep", str(sweep_file), "--out", str(out),
+               "--workers", "1", "--no-progress"]
+        # SIG_DFL in the child: a shell that starts jobs in the background ignores SIGINT
+        proc = subprocess.Popen(cmd, start_new_session=True, stdout=subprocess.PIPE,
+                                stderr=subprocess.PIPE, text=True,
+                                preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+        deadline = time.monotonic() + 300
+        while time.monotonic() < deadline and proc.poll() is None:
+            if len(list((out / "runs").glob("*/row.json"))) >= 1:
+                break
+            time.sleep(0.01)
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGINT)                 # Ctrl-C on the whole group
+        _, err = proc.communicate(timeout=120)
+        # the four runs take ~2 s: on a loaded machine the sweep may end before the signal
+        # lands, and nothing was interrupted; try again rather than test nothing
+        if not (proc.returncode == 0 and "4 computed" in err):
             break
-        time.sleep(0.05)
-    os.killpg(proc.pid, signal.SIGINT)                     # Ctrl-C on the whole group
-    _, err = proc.communicate(timeout=120)
     assert proc.returncode == 130, err
     assert "interrupted" in err and "Traceback" not in err
     first = pd.read_csv(out / "results.csv")
