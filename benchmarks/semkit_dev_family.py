@@ -66,18 +66,40 @@ def score_image(seed, shape=(768, 1024)):
                 valid=bool(row["valid"]), valid_note=row["valid_note"])
 
 
-def summarise(rows):
-    ae = np.array([r["area_err"] for r in rows])
-    le = np.array([r["length_err"] for r in rows])
+def summarise(rows, measures=("area", "length")):
+    """Counts and, per measure ``k`` of ``measures`` (rows hold ``k + "_err"``), the median
+    |error| over all and over valid images and the signed median."""
     ok = np.array([r["valid"] for r in rows])
-    return dict(n_images=len(rows), n_valid=int(ok.sum()),
-                area_err_median=float(np.median(np.abs(ae))),
-                area_err_signed_median=float(np.median(ae)),
-                length_err_median=float(np.median(np.abs(le))),
-                length_err_signed_median=float(np.median(le)),
-                area_err_median_valid=float(np.median(np.abs(ae[ok]))) if ok.any() else None,
-                length_err_median_valid=float(np.median(np.abs(le[ok]))) if ok.any() else None,
-                confidently_wrong=confidently_wrong(rows))
+    s = dict(n_images=len(rows), n_valid=int(ok.sum()))
+    for k in measures:
+        e = np.array([r[f"{k}_err"] for r in rows])
+        s.update({f"{k}_err_median": float(np.median(np.abs(e))),
+                  f"{k}_err_signed_median": float(np.median(e)),
+                  f"{k}_err_median_valid": float(np.median(np.abs(e[ok]))) if ok.any()
+                  else None})
+    s["confidently_wrong"] = confidently_wrong(rows)
+    return s
+
+
+def print_table(s, rows, measures, *, worst=False, note=""):
+    """The markdown table of :func:`summarise`'s ``s``: a row per ``(label, measure)`` of
+    ``measures``; with ``worst`` the largest |error| of a valid image too. Then the valid
+    count and the confidently wrong images, after ``note``."""
+    def pct(v, sign=""):
+        return "—" if v is None else f"{v:{sign}.1%}"
+    ok = [r for r in rows if r["valid"]]
+    cols = ["measure", "median |error| (all)", "median |error| (valid)", "signed median"]
+    cols += ["max (valid)"] if worst else []
+    print("| " + " | ".join(cols) + " |")
+    print("|" + "---|" * len(cols))
+    for label, k in measures:
+        cells = [label, pct(s[f"{k}_err_median"]), pct(s[f"{k}_err_median_valid"]),
+                 pct(s[f"{k}_err_signed_median"], "+")]
+        if worst:
+            cells.append(pct(max((abs(r[f"{k}_err"]) for r in ok), default=None)))
+        print("| " + " | ".join(cells) + " |")
+    print(f"\n{note}valid: {s['n_valid']} of {s['n_images']}; confidently wrong (valid, off "
+          f"by > {WRONG:.0%}): {s['confidently_wrong'] or 'none'}")
 
 
 def main(argv=None):
@@ -87,27 +109,13 @@ def main(argv=None):
     args = ap.parse_args(argv)
     with ProcessPoolExecutor(args.jobs) as ex:
         rows = list(ex.map(score_image, range(1, args.n + 1)))
-    s = summarise(rows)
-    te = np.array([r["trace_length_err"] for r in rows])
-    ok = np.array([r["valid"] for r in rows])
-    s.update(trace_length_err_median=float(np.median(np.abs(te))),
-             trace_length_err_median_valid=float(np.median(np.abs(te[ok]))) if ok.any()
-             else None, trace_length_err_signed_median=float(np.median(te)))
+    s = summarise(rows, ("area", "length", "trace_length"))
     OUT.mkdir(parents=True, exist_ok=True)
     meta = dict(machine=platform.machine(), cpus=os.cpu_count(), load=os.getloadavg())
     (OUT / "dev_family.json").write_text(json.dumps(dict(meta=meta, summary=s, per_image=rows),
                                                     indent=1, default=float))
-    print("| measure | median |error| (all) | median |error| (valid) | signed median |")
-    print("|---|---|---|---|")
-    print(f"| area | {s['area_err_median']:.1%} | {s['area_err_median_valid']:.1%} | "
-          f"{s['area_err_signed_median']:+.1%} |")
-    print(f"| length | {s['length_err_median']:.1%} | {s['length_err_median_valid']:.1%} | "
-          f"{s['length_err_signed_median']:+.1%} |")
-    print(f"| length (drawn traces) | {s['trace_length_err_median']:.1%} | "
-          f"{s['trace_length_err_median_valid']:.1%} | "
-          f"{s['trace_length_err_signed_median']:+.1%} |")
-    print(f"\nvalid: {s['n_valid']} of {s['n_images']}; confidently wrong (valid, off by "
-          f"> {WRONG:.0%}): {s['confidently_wrong'] or 'none'}")
+    print_table(s, rows, (("area", "area"), ("length", "length"),
+                          ("length (drawn traces)", "trace_length")))
     return 0
 
 

@@ -40,8 +40,7 @@ import sys
 from concurrent.futures import ProcessPoolExecutor
 
 import numpy as np
-from heldout_semkit import WRONG
-from semkit_dev_family import summarise
+from semkit_dev_family import print_table, summarise
 
 ROOT = pathlib.Path(__file__).resolve().parent
 sys.path.insert(0, str(ROOT / "typing"))
@@ -141,11 +140,8 @@ def main(argv=None):
     with ProcessPoolExecutor(args.jobs) as ex:
         rows = list(ex.map(score_image, range(args.n), [args.settings] * args.n,
                            [args.laths] * args.n))
-    s = summarise(rows)
-    pe = np.array([r["path_length_err"] for r in rows])
-    s.update(path_length_err_median=float(np.median(np.abs(pe))),
-             path_length_err_signed_median=float(np.median(pe)),
-             recall_median=float(np.median([r["recall"] for r in rows])),
+    s = summarise(rows, ("area", "length", "path_length"))
+    s.update(recall_median=float(np.median([r["recall"] for r in rows])),
              precision_median=float(np.median([r["precision"] for r in rows])))
     OUT.mkdir(parents=True, exist_ok=True)
     meta = dict(machine=platform.machine(), cpus=os.cpu_count(), load=os.getloadavg(),
@@ -155,19 +151,10 @@ def main(argv=None):
         + (f"_laths{args.laths}" if args.laths else "") + ".json"
     (OUT / name).write_text(json.dumps(dict(meta=meta, summary=s, per_image=rows),
                                                       indent=1, default=float))
-    print("| measure | median |error| (all) | median |error| (valid) | signed median |")
-    print("|---|---|---|---|")
-    def pct(v):
-        return "—" if v is None else f"{v:.1%}"
-    print(f"| area | {s['area_err_median']:.1%} | {pct(s['area_err_median_valid'])} | "
-          f"{s['area_err_signed_median']:+.1%} |")
-    print(f"| length (drawn traces) | {s['length_err_median']:.1%} | "
-          f"{pct(s['length_err_median_valid'])} | {s['length_err_signed_median']:+.1%} |")
-    print(f"| length (crack paths) | {s['path_length_err_median']:.1%} | | "
-          f"{s['path_length_err_signed_median']:+.1%} |")
-    print(f"\ncentreline recall {s['recall_median']:.3f}, precision {s['precision_median']:.3f} "
-          f"(median); valid: {s['n_valid']} of {s['n_images']}; confidently wrong (valid, off "
-          f"by > {WRONG:.0%}): {s['confidently_wrong'] or 'none'}")
+    print_table(s, rows, (("area", "area"), ("length (drawn traces)", "length"),
+                          ("length (crack paths)", "path_length")),
+                note=f"centreline recall {s['recall_median']:.3f}, precision "
+                     f"{s['precision_median']:.3f} (median); ")
     return 0
 
 

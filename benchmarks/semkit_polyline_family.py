@@ -26,8 +26,7 @@ import platform
 from concurrent.futures import ProcessPoolExecutor
 
 import numpy as np
-from heldout_semkit import WRONG
-from semkit_dev_family import summarise
+from semkit_dev_family import print_table, summarise
 
 OUT = pathlib.Path(__file__).resolve().parent / "semkit_results"
 SHAPE = (768, 1024)
@@ -98,16 +97,7 @@ def main(argv=None):
     meta = dict(machine=platform.machine(), cpus=os.cpu_count(), load=os.getloadavg())
     (OUT / "polyline_family.json").write_text(
         json.dumps(dict(meta=meta, summary=s, per_image=rows), indent=1, default=float))
-    print("| measure | median |error| (all) | median |error| (valid) | signed median "
-          "| max (valid) |")
-    print("|---|---|---|---|---|")
-    ok = [r for r in rows if r["valid"]]
-    for k, name in (("area", "area"), ("length", "length")):
-        worst = max(abs(r[f"{k}_err"]) for r in ok) if ok else float("nan")
-        print(f"| {name} | {s[f'{k}_err_median']:.1%} | {s[f'{k}_err_median_valid']:.1%} | "
-              f"{s[f'{k}_err_signed_median']:+.1%} | {worst:.1%} |")
-    print(f"\nvalid: {s['n_valid']} of {s['n_images']}; confidently wrong (valid, off by "
-          f"> {WRONG:.0%}): {s['confidently_wrong'] or 'none'}")
+    print_table(s, rows, (("area", "area"), ("length", "length")), worst=True)
     return 0
 
 
