@@ -89,6 +89,8 @@ class CrackAnalysis:
         if img.ndim != 2 or img.size == 0:
             raise InputError(f"{name or 'image'}: expected a non-empty 2-D image")
         self._no_data = None
+        #: the continuation pieces the ridge stage adds (set with the detection)
+        self._continuations = None
         if img.dtype.kind == "f" and not np.isfinite(img).all():
             # NaN / inf pixels hold no data (a CT export's outside, a masked stitch): outside
             # the sample region, filled with the finite median until the region fills them
@@ -716,9 +718,7 @@ class CrackAnalysis:
         from ._kernels import lookup
         ridge, _ = self.ridge
         lab, keep = self._ridge_components
-        det = self.detection[0]
-        cont = getattr(self, "_continuations", None)
-        det = (det & ~cont if cont is not None else det).view(np.uint8)
+        det = (self.detection[0] & ~self._continuations).view(np.uint8)
         near = cv2.dilate(det, np.ones((3, 3), np.uint8)).view(bool)
         touching = np.zeros(keep.size, bool)
         touching[lab[near & ridge]] = True

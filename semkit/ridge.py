@@ -23,7 +23,7 @@ from __future__ import annotations
 import numpy as np
 
 from . import config
-from .robust import mad_sigma
+from .robust import group_medians, mad_sigma
 
 __all__ = ["ridge_response", "ridge_mask", "add_ridge_lines"]
 
@@ -153,21 +153,6 @@ def ridge_mask(image, *, crack_level, region=None, sigmas=config.RIDGE_SIGMAS_PX
     return mask, depth
 
 
-def _group_medians(values, groups, counts):
-    """Median of ``values`` per group id ``0 .. len(counts) - 1`` (``counts``: the group
-    sizes; NaN for an empty group), from one sort."""
-    v = np.asarray(values, np.float64)
-    order = np.lexsort((v, groups))
-    v = v[order]
-    start = np.concatenate([[0], np.cumsum(counts)[:-1]])
-    out = np.full(len(counts), np.nan)
-    has = counts > 0
-    lo = start[has] + (counts[has] - 1) // 2
-    hi = start[has] + counts[has] // 2
-    out[has] = 0.5 * (v[lo] + v[hi])
-    return out
-
-
 def add_ridge_lines(detect, area, ridge, depth, components=None, *,
                     continuations=True, min_px=config.RIDGE_CONTINUATION_MIN_PX,
                     min_depth=config.RIDGE_MIN_DEPTH_FRACTION, return_continuations=False):
@@ -228,7 +213,7 @@ def add_ridge_lines(detect, area, ridge, depth, components=None, *,
             m, pieces = cv2.connectedComponents(beyond.view(np.uint8), connectivity=8)
             at = pieces[beyond]
             size = np.bincount(at, minlength=m)
-            ok = (size >= min_px) & (_group_medians(depth[beyond], at, size) >= min_depth)
+            ok = (size >= min_px) & (group_medians(depth[beyond], at, size) >= min_depth)
             ok[0] = False
             if ok.any():
                 added = _kernels.lookup(ok, pieces)

@@ -164,7 +164,7 @@ def skeleton_length(skel, labels, n_labels, *, estimator="corner"):
     labels : (M, N) int32
         Object labels (0 = background).
     n_labels : int
-        Highest label + 1.
+        Highest label + 1 (a smaller value raises ``ValueError``).
     estimator : {"corner", "kulpa", "sqrt2", "count"}
         ``corner``: Vossepoel & Smeulders (1982), 0.980 n_e + 1.406 n_o - 0.091 n_c (n_c
         corners), unbiased and within ~2 % for every direction; ``kulpa``: 0.948 n_e + 1.343
