@@ -865,3 +865,132 @@ def skeleton_window_sums(skel, aperture, mask, ends, dark, rr, cc, half, out):
         out[k, 8] = sm
         out[k, 9] = se
         out[k, 10] = sd
+
+
+@njit
+def cross_section_valleys(img, bg, labels, skel, rr, cc, crack_level, depth, rise, min_half,
+                          max_reach, out):
+    """Resolved parallel traces across each centreline pixel of an object.
+
+    At centreline pixel ``(rr[k], cc[k])`` the line's direction is the principal axis of the
+    object's centreline pixels in the 7 x 7 box around it; along the normal the object's
+    extent is walked on each side (0.5-px steps, at most ``max_reach``), and the grey is
+    sampled (bilinear, 0.5-px steps) from 1.5 px beyond one side to 1.5 px beyond the other.
+    With ``d = (bg - grey) / (bg - crack_level)`` (``bg`` at the centreline pixel), a
+    *valley* is a local maximum of ``d`` at least ``depth``; two valleys count apart when
+    ``d`` between them falls ``rise`` x the shallower one's ``d`` below it, else the deeper
+    stands for both. Cross-sections of half-width under ``min_half`` (one thin trace) read 1.
+
+    Parameters
+    ----------
+    img, bg : (M, N) float32
+    labels : (M, N) int32
+    skel : (M, N) bool
+        The centreline pixels.
+    rr, cc : (K,) int64
+        The centreline pixels to read (all inside labelled objects).
+    crack_level, depth, rise, min_half, max_reach : float
+    out : (K,) int32
+        Receives the number of valleys (at least 1).
+    """
+    h, w = img.shape
+    nmax = int(4 * (max_reach + 2.0)) + 3
+    d = np.empty(nmax, np.float32)
+    keep = np.empty(nmax, np.int64)
+    for k in range(rr.size):
+        i = rr[k]
+        j = cc[k]
+        lab = labels[i, j]
+        out[k] = 1
+        # direction: principal axis of the centreline pixels nearby
+        n = 0
+        sx = 0.0
+        sy = 0.0
+        for a in range(max(i - 3, 0), min(i + 4, h)):
+            for b in range(max(j - 3, 0), min(j + 4, w)):
+                if skel[a, b] and labels[a, b] == lab:
+                    n += 1
+                    sx += b
+                    sy += a
+        if n < 3:
+            continue
+        mx = sx / n
+        my = sy / n
+        cxx = 0.0
+        cyy = 0.0
+        cxy = 0.0
+        for a in range(max(i - 3, 0), min(i + 4, h)):
+            for b in range(max(j - 3, 0), min(j + 4, w)):
+                if skel[a, b] and labels[a, b] == lab:
+                    cxx += (b - mx) * (b - mx)
+                    cyy += (a - my) * (a - my)
+                    cxy += (b - mx) * (a - my)
+        th = 0.5 * math.atan2(2.0 * cxy, cxx - cyy)
+        nx = -math.sin(th)
+        ny = math.cos(th)
+        # the object's extent along the normal, each side
+        e_pos = 0.0
+        e_neg = 0.0
+        for s in range(2):
+            sg = 1.0 if s == 0 else -1.0
+            t = 0.5
+            while t <= max_reach:
+                y = int(round(i + sg * t * ny))
+                x = int(round(j + sg * t * nx))
+                if y < 0 or y >= h or x < 0 or x >= w or labels[y, x] != lab:
+                    break
+                t += 0.5
+            if s == 0:
+                e_pos = t - 0.5
+            else:
+                e_neg = t - 0.5
+        if 0.5 * (e_pos + e_neg) < min_half:
+            continue
+        g0 = bg[i, j]
+        den = g0 - crack_level
+        if not den >= 1e-3:
+            den = 1e-3
+        m = 0
+        t = -(e_neg + 1.5)
+        while t <= e_pos + 1.5 + 1e-9 and m < nmax:
+            y = i + t * ny
+            x = j + t * nx
+            if y < 0.0:
+                y = 0.0
+            elif y > h - 1.0:
+                y = h - 1.0
+            if x < 0.0:
+                x = 0.0
+            elif x > w - 1.0:
+                x = w - 1.0
+            y0 = min(int(y), h - 2) if h > 1 else 0
+            x0 = min(int(x), w - 2) if w > 1 else 0
+            fy = y - y0
+            fx = x - x0
+            y1 = min(y0 + 1, h - 1)
+            x1 = min(x0 + 1, w - 1)
+            v = ((1 - fy) * ((1 - fx) * img[y0, x0] + fx * img[y0, x1])
+                 + fy * ((1 - fx) * img[y1, x0] + fx * img[y1, x1]))
+            d[m] = (g0 - v) / den
+            m += 1
+            t += 0.5
+        nk = 0
+        for q in range(1, m - 1):
+            if d[q] > d[q - 1] and d[q] >= d[q + 1] and d[q] >= depth:
+                if nk == 0:
+                    keep[0] = q
+                    nk = 1
+                    continue
+                p = keep[nk - 1]
+                low = d[p]
+                for u in range(p, q + 1):
+                    if d[u] < low:
+                        low = d[u]
+                shallow = min(d[p], d[q])
+                if shallow - low >= rise * shallow:
+                    keep[nk] = q
+                    nk += 1
+                elif d[q] > d[p]:
+                    keep[nk - 1] = q
+        if nk > 1:
+            out[k] = nk

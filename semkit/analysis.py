@@ -392,6 +392,16 @@ class CrackAnalysis:
             t.loc[thin, "mean_aperture_um"] = (pv[ids] / t.loc[thin, "length_px"].to_numpy()
                                                * px)
             t.loc[thin, "area_method"] = "partial_volume"
+        if self.options.length:
+            # a layered crack's traces, merged into one object, each count in its length
+            from .measure import parallel_traces
+            f = parallel_traces(self.smooth, self.labels, self.n_objects,
+                                skeleton=self.skeleton, background=th.background,
+                                crack_level=th.crack_level)[t["crack_id"].to_numpy()]
+            t["n_traces"] = f
+            t["length_px"] *= f
+            t["length_um"] *= f
+            t["mean_aperture_um"] /= f
         return t
 
     @functools.cached_property

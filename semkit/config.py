@@ -156,6 +156,19 @@ VS_CORNER = 0.091
 #: SPUR_EXTRA_PX, are edge noise and are pruned.
 SPUR_HALF_WIDTHS = 2.0
 SPUR_EXTRA_PX = 2.0
+#: parallel traces (``semkit.measure.parallel_traces``): a layered crack's traces, merged into
+#: one object, each count in its length. Across a centreline pixel a trace is a grey valley at
+#: least TRACE_MIN_DEPTH of the way from the local background to the crack grey; two valleys
+#: are two traces when the depth between them is TRACE_MIN_RISE of the shallower one's depth
+#: less than it (a share: thin traces are shallow by partial volume); cross-sections of
+#: half-width under TRACE_MIN_HALF_WIDTH_PX hold one trace; an object's length counts its mean
+#: number of traces when at least TRACE_MIN_SHARE of its centreline crosses two or more
+#: (chosen on the drawn-crack family).
+TRACE_MIN_DEPTH = 0.35
+TRACE_MIN_RISE = 0.3
+TRACE_MIN_HALF_WIDTH_PX = 1.5
+TRACE_MIN_SHARE = 0.3
+TRACE_MAX_REACH_PX = 8.0
 #: a crack whose mean width (area / length) is below this many px is flagged `thin`.
 THIN_WIDTH_PX = 1.6
 #: area (``semkit.measure.mixed_area``): a crack cross-section counts as resolved when its

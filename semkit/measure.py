@@ -13,7 +13,7 @@ from . import config
 from .skeleton import skeleton_length, skeleton_nodes
 
 __all__ = ["label_cracks", "object_moments", "is_pore", "crack_table", "partial_volume_area",
-           "CRACK_COLUMNS"]
+           "mixed_area", "parallel_traces", "CRACK_COLUMNS"]
 
 #: cracks.csv columns (DESIGN.md §4) in order; more follow.
 CRACK_COLUMNS = ["image", "crack_id", "area_um2", "length_um", "mean_aperture_um",
@@ -98,7 +98,8 @@ def crack_table(labels, n, *, pixel_size_um, skeleton=None, area_mask=None, imag
     Returns
     -------
     table : DataFrame
-        :data:`CRACK_COLUMNS` then ``area_px, length_px, x_px, y_px, is_pore, thin``.
+        :data:`CRACK_COLUMNS` then ``area_px, length_px, x_px, y_px, is_pore, thin,
+        n_traces`` (1 here: :func:`parallel_traces` measures it).
         ``thin`` flags cracks narrower than ``THIN_WIDTH_PX`` (their area is the least
         reliable part; their length is still measured). ``type_pre``/``type_post`` are
         ``unknown`` until classification.
@@ -152,7 +153,7 @@ def crack_table(labels, n, *, pixel_size_um, skeleton=None, area_mask=None, imag
         "tortuosity": tort[1:], "n_branches": n_br[1:].astype(np.int64),
         "type_pre": "unknown", "type_post": "unknown", "confidence": np.nan,
         "area_px": area_px[1:], "length_px": length_px[1:], "x_px": cx[1:], "y_px": cy[1:],
-        "is_pore": pore[1:], "thin": thin[1:],
+        "is_pore": pore[1:], "thin": thin[1:], "n_traces": 1.0,
     })
     return df
 
@@ -277,3 +278,75 @@ def mixed_area(image, labels, n, *, skeleton, background, crack_level, area_mask
                              np.float32(crack_level), np.float32(resolved), out, n_pv, n_own)
     share = n_pv / np.maximum(n_own, 1)
     return out[:n + 1], share[:n + 1]
+
+
+def parallel_traces(image, labels, n, *, skeleton, background, crack_level,
+                    depth=config.TRACE_MIN_DEPTH, rise=config.TRACE_MIN_RISE,
+                    min_half_width=config.TRACE_MIN_HALF_WIDTH_PX,
+                    min_share=config.TRACE_MIN_SHARE, max_reach=config.TRACE_MAX_REACH_PX):
+    """Mean number of resolved parallel traces along each object (1 for a single trace).
+
+    A layered shear crack is two or three thin traces a few pixels apart; the detect mask
+    joins them into one band and its skeleton runs once down the middle, so the band's
+    length counts one trace. Across each centreline pixel the grey profile is read along the
+    normal (:func:`semkit._kernels.cross_section_valleys`, every other centreline pixel):
+    each valley at least ``depth`` of the way from the local background to the crack grey,
+    parted from the next by a rise of ``rise`` times the shallower valley's depth, is a
+    trace. An object whose centreline crosses two or more traces over at least
+    ``min_share`` of its length counts the mean number of traces along it; others count 1
+    (a few split cross-sections are debris or noise, not a second trace). A wide open crack
+    has one valley, its flat void.
+
+    Parameters
+    ----------
+    image : (M, N) float
+        The grey image that was thresholded.
+    labels : (M, N) int32 ; n : int
+    skeleton : (M, N) bool
+        Centrelines of the objects.
+    background : (M, N) float
+        Local background grey (``ThresholdResult.background``).
+    crack_level : float
+        Crack core grey (``ThresholdResult.crack_level``).
+    depth, rise, min_half_width, min_share, max_reach : float
+        See ``semkit.config`` (``TRACE_*``).
+
+    Returns
+    -------
+    traces : (n + 1,) ndarray of float64
+        Length factor per object (index 0 unused: 1).
+
+    Examples
+    --------
+    Two thin dark lines 5 px apart, joined by a darker band between them, and one line:
+
+    >>> img = np.full((40, 80), 200, np.float32)
+    >>> img[10:30, 20:70] = 150; img[[12, 17], 20:70] = 40; img[25, 20:70] = 40
+    >>> lab = np.zeros(img.shape, np.int32); lab[11:19, 20:70] = 1; lab[24:27, 20:70] = 2
+    >>> sk = np.zeros(img.shape, bool); sk[14, 21:69] = True; sk[25, 21:69] = True
+    >>> t = parallel_traces(img, lab, 2, skeleton=sk, background=np.full(img.shape, 200.0),
+    ...                     crack_level=40.0)
+    >>> t[1:].round(2).tolist()
+    [2.0, 1.0]
+    """
+    from . import _kernels
+    lab = np.ascontiguousarray(labels, np.int32)
+    skel = np.ascontiguousarray(skeleton, bool) & (lab > 0)
+    traces = np.ones(n + 1, np.float64)
+    rr, cc = _kernels.pixel_coords(skel)
+    if rr.size == 0:
+        return traces
+    if rr.size > 1:  # every other centreline pixel (raster order) reads the mean as well
+        rr, cc = rr[::2].copy(), cc[::2].copy()
+    count = np.ones(rr.size, np.int32)
+    _kernels.cross_section_valleys(np.ascontiguousarray(image, np.float32),
+                                   np.ascontiguousarray(background, np.float32), lab, skel,
+                                   rr, cc, float(crack_level), float(depth), float(rise),
+                                   float(min_half_width), float(max_reach), count)
+    at = lab[rr, cc]
+    tot = np.bincount(at, minlength=n + 1)[:n + 1]
+    multi = np.bincount(at, weights=count > 1, minlength=n + 1)[:n + 1]
+    mean = np.bincount(at, weights=count, minlength=n + 1)[:n + 1] / np.maximum(tot, 1)
+    use = (tot > 0) & (multi >= min_share * np.maximum(tot, 1))
+    traces[use] = mean[use]
+    return traces
