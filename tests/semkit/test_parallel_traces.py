@@ -32,7 +32,7 @@ def _render(lines, shape=(200, 320), blur=0.8, noise=3.0, seed=0):
     return np.clip(np.rint(img), 0, 255).astype(np.uint8), total
 
 
-def _pair(spacing, angle_deg, width=1.2, length=220.0, centre=(160.0, 100.0)):
+def _pair(spacing, angle_deg, width=1.2, length=160.0, centre=(160.0, 100.0)):
     """Two parallel traces ``spacing`` px apart (centre to centre)."""
     t = np.radians(angle_deg)
     u = np.array([np.cos(t), np.sin(t)])
@@ -45,18 +45,19 @@ def _pair(spacing, angle_deg, width=1.2, length=220.0, centre=(160.0, 100.0)):
     return out
 
 
-@pytest.mark.parametrize("spacing,angle", [(4.0, 0.0), (4.0, 30.0), (5.0, 75.0), (6.0, 45.0)])
+@pytest.mark.parametrize("spacing,angle", [(4.0, 0.0), (4.0, 30.0), (5.0, 75.0), (4.0, 90.0),
+                                           (6.0, 45.0)])
 def test_each_trace_of_a_layered_crack_counts(spacing, angle):
-    """Two 1.2-px traces 4-6 px apart under a 0.8-px blur: the detect mask joins them into
-    one band whose centreline counts them once (length -50 %); read across, the band holds
-    two valleys, and the length counts both: within 8 % of the drawn length (the band's
-    centreline stops a few px short where the traces part at its ends; the traces 6 px
-    apart are two objects)."""
+    """Two 1.2-px traces 160 px long, 4-6 px apart under a 0.8-px blur: the detect mask
+    joins them into one band whose centreline counts them once (length -50 %); read across,
+    the band holds two valleys, and the length counts both: within 9 % of the drawn length
+    (-1 to -8 %: the band's centreline stops 4-6 px short of each end; the traces 6 px apart
+    are two objects)."""
     img, true_len = _render(_pair(spacing, angle))
     a = analyse_image(img, pixel_size_um=1.0, classify=False, flatten="none")
     c = a.cracks
     length = float(c.length_px.sum())
-    assert abs(length / true_len - 1) <= 0.08, (length, true_len, c[["length_px", "n_traces"]])
+    assert abs(length / true_len - 1) <= 0.09, (length, true_len, c[["length_px", "n_traces"]])
     merged = c[c.n_traces > 1]
     if len(c) == 1:  # joined into one object: its centreline alone would read about half
         assert len(merged) == 1 and 1.7 <= float(merged.n_traces.iloc[0]) <= 2.1
