@@ -70,7 +70,8 @@ def _make(k, shape, folder):
     a_t, a_s = int((tp == 1).sum()), int((tp == 2).sum())
     return dict(image=name, height=shape[0], width=shape[1], stage="failure" if post
                 else "pre-test", area_px=s.crack_area_px, length_px=s.crack_length_px,
-                trace_length_px=float(s.cracks.trace_length_px.sum()), P_true=a_t / a_s if post and a_s else np.nan)
+                trace_length_px=float(s.cracks.trace_length_px.sum()),
+                P_true=a_t / a_s if post and a_s else np.nan)
 
 
 def _errors(images, truth):
