@@ -902,29 +902,30 @@ def cross_section_valleys(img, bg, labels, skel, rr, cc, crack_level, depth, ris
         j = cc[k]
         lab = labels[i, j]
         out[k] = 1
-        # direction: principal axis of the centreline pixels nearby
+        # direction: principal axis of the centreline pixels nearby (one pass: raw moments
+        # of the offsets from (i, j), small integers, so the centring loses nothing)
         n = 0
         sx = 0.0
         sy = 0.0
+        sxx = 0.0
+        syy = 0.0
+        sxy = 0.0
         for a in range(max(i - 3, 0), min(i + 4, h)):
             for b in range(max(j - 3, 0), min(j + 4, w)):
                 if skel[a, b] and labels[a, b] == lab:
+                    dx = float(b - j)
+                    dy = float(a - i)
                     n += 1
-                    sx += b
-                    sy += a
+                    sx += dx
+                    sy += dy
+                    sxx += dx * dx
+                    syy += dy * dy
+                    sxy += dx * dy
         if n < 3:
             continue
-        mx = sx / n
-        my = sy / n
-        cxx = 0.0
-        cyy = 0.0
-        cxy = 0.0
-        for a in range(max(i - 3, 0), min(i + 4, h)):
-            for b in range(max(j - 3, 0), min(j + 4, w)):
-                if skel[a, b] and labels[a, b] == lab:
-                    cxx += (b - mx) * (b - mx)
-                    cyy += (a - my) * (a - my)
-                    cxy += (b - mx) * (a - my)
+        cxx = sxx - sx * sx / n
+        cyy = syy - sy * sy / n
+        cxy = sxy - sx * sy / n
         th = 0.5 * math.atan2(2.0 * cxy, cxx - cyy)
         nx = -math.sin(th)
         ny = math.cos(th)
