@@ -74,7 +74,7 @@ def smooth_profile(x, sigma, truncate=4.0):
     Examples
     --------
     >>> smooth_profile([0.0, 0.0, 3.0, 0.0, 0.0], 1.0).round(3).tolist()
-    [0.163, 0.728, 1.218, 0.728, 0.163]
+    [0.175, 0.726, 1.197, 0.726, 0.175]
     """
     x = np.asarray(x, np.float64)
     r = int(truncate * float(sigma) + 0.5)

@@ -180,7 +180,7 @@ def find_sample_region(image, *, noise=None):
     >>> yy, xx = np.mgrid[:100, :100]
     >>> img = np.where((yy - 50) ** 2 + (xx - 50) ** 2 < 45 ** 2, 120, 2).astype(np.uint8)
     >>> r = find_sample_region(img); r.kind, round(r.fraction, 2)
-    ('surround', 0.58)
+    ('surround', 0.6)
     """
     mask, kind, note = _surround(image, noise)
     ann, n_boxes = find_annotations(image)

@@ -210,8 +210,8 @@ def labels_from_mask(grey, mask, *, min_contrast=MIN_CONTRAST, background_px=BAC
     --------
     >>> g = np.full((9, 9), 200, np.uint8); g[:, 4] = 50
     >>> m = np.zeros((9, 9), bool); m[:, 3:6] = True
-    >>> labels_from_mask(g, m)[4].tolist()
-    [2, 2, 0, 0, 1, 0, 0, 0, 2]
+    >>> labels_from_mask(g, m, far_px=1)[4].tolist()
+    [2, 2, 0, 0, 1, 0, 0, 2, 2]
     """
     from scipy import ndimage as ndi
     g = _as_unit_float(grey)
