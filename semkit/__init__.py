@@ -28,6 +28,7 @@ _LAZY = {
     # stages 5-6
     "label_cracks": "measure", "crack_table": "measure", "partial_volume_area": "measure",
     "skeletonize": "skeleton", "prune_spurs": "skeleton", "skeleton_length": "skeleton",
+    "tip_extension": "skeleton",
     # the analysis object, the folder loop, figures, synthetic data
     "analyse_image": "analysis", "CrackAnalysis": "analysis", "AnalysisOptions": "options",
     "analyse_folder": "workflow", "analyse_grains_folder": "workflow",

@@ -995,3 +995,99 @@ def cross_section_valleys(img, bg, labels, skel, rr, cc, crack_level, depth, ris
                     keep[nk - 1] = q
         if nk > 1:
             out[k] = nk
+
+
+@njit
+def tip_reach(skel, labels, rr, cc, back_px, max_radius, out):
+    """How far each skeleton end's object reaches beyond the circle inscribed at the end.
+
+    At end pixel ``(rr[k], cc[k])`` the direction is the chord from the skeleton pixel
+    ``back_px`` steps back along the branch (fewer where a junction comes first; none, and
+    ``out[k] = 0``, under 2) to the end. Along it the object (same label) is sampled in
+    0.25-px steps to its edge: reach ``t`` (to within 0.125 px). The inscribed radius ``r``
+    is the distance to the nearest pixel outside the object, less half a pixel (at most
+    ``max_radius``).
+    ``out[k] = max(t - r + 0.5, 0)``: the half of the end pixel the chain code leaves out, and
+    the stretch of object the skeleton stops short of beyond the inscribed circle (none at a
+    round or flat end, which the circle touches). An end whose object runs into the image
+    border gets ``out[k] = t``: the crack goes on beyond the frame.
+
+    Parameters
+    ----------
+    skel : (M, N) bool
+    labels : (M, N) int32
+    rr, cc : (K,) int64
+        The skeleton's end pixels (exactly one skeleton neighbour).
+    back_px : int
+    max_radius : float
+    out : (K,) float64
+    """
+    h, w = skel.shape
+    vis_i = np.empty(back_px + 1, np.int64)
+    vis_j = np.empty(back_px + 1, np.int64)
+    rad = int(max_radius) + 1
+    for k in range(rr.size):
+        i0 = rr[k]
+        j0 = cc[k]
+        lab = labels[i0, j0]
+        out[k] = 0.0
+        vis_i[0] = i0
+        vis_j[0] = j0
+        pi = i0
+        pj = j0
+        n = 0
+        while n < back_px:
+            cnt = 0
+            ni = -1
+            nj = -1
+            for a in range(max(pi - 1, 0), min(pi + 2, h)):
+                for b in range(max(pj - 1, 0), min(pj + 2, w)):
+                    if not skel[a, b]:
+                        continue
+                    seen = False
+                    for q in range(n + 1):
+                        if vis_i[q] == a and vis_j[q] == b:
+                            seen = True
+                            break
+                    if not seen:
+                        cnt += 1
+                        ni = a
+                        nj = b
+            if cnt != 1:
+                break
+            n += 1
+            vis_i[n] = ni
+            vis_j[n] = nj
+            pi = ni
+            pj = nj
+        if n < 2:
+            continue
+        vy = float(i0 - pi)
+        vx = float(j0 - pj)
+        nv = math.sqrt(vy * vy + vx * vx)
+        vy /= nv
+        vx /= nv
+        t = 0.125  # samples between pixel edges: no sample rounds on an edge
+        framed = False
+        while True:
+            y = int(math.floor(i0 + t * vy + 0.5))
+            x = int(math.floor(j0 + t * vx + 0.5))
+            if y < 0 or y >= h or x < 0 or x >= w:
+                framed = True
+                break
+            if labels[y, x] != lab:
+                break
+            t += 0.25
+        reach = t - 0.125
+        if framed:  # the crack runs on beyond the frame: its length here ends at the edge
+            out[k] = reach
+            continue
+        r2 = max_radius * max_radius + max_radius + 0.25
+        for a in range(max(i0 - rad, 0), min(i0 + rad + 1, h)):
+            for b in range(max(j0 - rad, 0), min(j0 + rad + 1, w)):
+                if labels[a, b] != lab:
+                    d2 = float((a - i0) * (a - i0) + (b - j0) * (b - j0))
+                    if d2 < r2:
+                        r2 = d2
+        r = min(math.sqrt(r2) - 0.5, max_radius)
+        out[k] = max(reach - r + 0.5, 0.0)

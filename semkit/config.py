@@ -152,6 +152,11 @@ KULPA_DIAGONAL = 1.343
 VS_STRAIGHT = 0.980
 VS_DIAGONAL = 1.406
 VS_CORNER = 0.091
+#: a skeleton stops short of its object's ends: each end adds the object's reach beyond the
+#: circle inscribed there (``semkit.skeleton.tip_extension``), along the chord from the
+#: skeleton pixel TIP_BACK_PX steps back; inscribed radii are read up to TIP_MAX_RADIUS_PX.
+TIP_BACK_PX = 6
+TIP_MAX_RADIUS_PX = 12.0
 #: spurs (junction-to-end skeleton branches) shorter than this many local half-widths, plus
 #: SPUR_EXTRA_PX, are edge noise and are pruned.
 SPUR_HALF_WIDTHS = 2.0

@@ -6,7 +6,8 @@ stopped, so pixel-wise scores mostly measure the brush. These scores compare cen
 * :func:`centreline_scores` — both masks are skeletonised; a skeleton pixel counts as found when
   it lies within ``tol_px`` of the *other mask* (precision: predicted skeleton near the truth;
   recall: truth skeleton near the prediction), and F1 of the two. Lengths are the skeleton
-  lengths of both masks measured the same way (:func:`semkit.skeleton.skeleton_length`).
+  lengths of both masks measured the same way as a crack's (:func:`semkit.skeleton.
+  skeleton_length` plus :func:`semkit.skeleton.tip_extension`).
 * :func:`polyline_coverage` — the share of a hand-drawn polyline's length lying within
   ``tol_px`` of a detected crack (a crack traced by hand as a line, not painted).
 """
@@ -22,6 +23,15 @@ def _skeleton(mask):
     from .skeleton import prune_spurs, skeletonize
     m = np.asarray(mask, bool)
     return prune_spurs(skeletonize(m), m)
+
+
+def _length(skel, mask):
+    """Total length (px) of a mask's skeleton, measured as :func:`semkit.measure.crack_table`
+    measures a crack's: chain code plus what the skeleton leaves out at the ends."""
+    from .measure import label_cracks
+    from .skeleton import skeleton_length, tip_extension
+    lab, n = label_cracks(mask)
+    return float((skeleton_length(skel, lab, n + 1) + tip_extension(skel, lab, n + 1)).sum())
 
 
 def _near(mask, tol_px):
@@ -58,7 +68,6 @@ def centreline_scores(pred_mask, truth_mask, *, tol_px=2.0, valid_mask=None):
     >>> round(s["precision"], 2), round(s["recall"], 2)
     (1.0, 1.0)
     """
-    from .skeleton import skeleton_length
     p = np.asarray(pred_mask, bool)
     t = np.asarray(truth_mask, bool)
     if p.shape != t.shape:
@@ -71,9 +80,8 @@ def centreline_scores(pred_mask, truth_mask, *, tol_px=2.0, valid_mask=None):
     prec = float((sp & _near(t, tol_px)).sum() / n_sp) if n_sp else float("nan")
     rec = float((st & _near(p, tol_px)).sum() / n_st) if n_st else float("nan")
     f1 = 2 * prec * rec / (prec + rec) if prec + rec > 0 else float("nan")
-    ones = np.ones(p.shape, np.int32)
-    lp = float(skeleton_length(sp, ones, 2)[1]) if n_sp else 0.0
-    lt = float(skeleton_length(st, ones, 2)[1]) if n_st else 0.0
+    lp = _length(sp, p if valid_mask is None else p & v) if n_sp else 0.0
+    lt = _length(st, t if valid_mask is None else t & v) if n_st else 0.0
     ap, at = int(p.sum()), int(t.sum())
     return dict(precision=prec, recall=rec, f1=f1, length_pred_px=lp, length_truth_px=lt,
                 length_ratio=lp / lt if lt else float("nan"), area_pred_px=ap,
@@ -121,8 +129,8 @@ def polyline_coverage(points_xy, detected_mask, *, tol_px=3.0):
     Examples
     --------
     >>> m = np.zeros((10, 30), bool); m[5, 0:15] = True
-    >>> polyline_coverage([(0, 4), (29, 4)], m, tol_px=1.5)
-    0.5
+    >>> round(polyline_coverage([(0, 4), (29, 4)], m, tol_px=1.5), 3)  # x = 0 .. 15 of 30
+    0.533
     """
     d = np.asarray(detected_mask, bool)
     line = rasterise_polyline(points_xy, d.shape)

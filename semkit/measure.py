@@ -1,6 +1,7 @@
 """Stage 5: label crack objects and measure them (one row per crack).
 
-Area is the pixel count x pixel area; length comes from the skeleton with Kulpa weights
+Area is the pixel count x pixel area; length comes from the skeleton's chain code with
+unbiased weights, plus what the skeleton leaves out at the crack's ends
 (:mod:`semkit.skeleton`); the mean aperture is area / length. Round, compact dark objects
 (pores) are told apart from cracks by shape and reported separately.
 """
@@ -10,7 +11,7 @@ import numpy as np
 import pandas as pd
 
 from . import config
-from .skeleton import skeleton_length, skeleton_nodes
+from .skeleton import skeleton_length, skeleton_nodes, tip_extension
 
 __all__ = ["label_cracks", "object_moments", "is_pore", "crack_table", "partial_volume_area",
            "mixed_area", "parallel_traces", "CRACK_COLUMNS"]
@@ -116,6 +117,8 @@ def crack_table(labels, n, *, pixel_size_um, skeleton=None, area_mask=None, imag
     pore = is_pore(area_all, mxx, myy, mxy)
     if skeleton is not None:
         length_px = skeleton_length(skeleton, labels, n + 1, estimator=length_estimator)
+        if length_estimator != "count":  # ImageJ's habit counts pixels and nothing more
+            length_px = length_px + tip_extension(skeleton, labels, n + 1)
         # isolated skeleton pixels (tiny blobs) have no links: give them one pixel of length
         single = np.bincount(labels[skeleton], minlength=n + 1) > 0
         length_px = np.where(single & (length_px == 0), 1.0, length_px)

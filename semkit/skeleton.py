@@ -13,7 +13,8 @@ import numpy as np
 
 from . import _kernels, config
 
-__all__ = ["skeletonize", "prune_spurs", "chain_counts", "skeleton_length", "skeleton_nodes"]
+__all__ = ["skeletonize", "prune_spurs", "chain_counts", "skeleton_length", "skeleton_nodes",
+           "tip_extension"]
 
 
 def _thin_luts():
@@ -219,3 +220,54 @@ def skeleton_nodes(skel):
     nb = cv2.filter2D(s, cv2.CV_16S, k, borderType=cv2.BORDER_CONSTANT)
     sb = s.astype(bool)
     return sb & (nb == 1), sb & (nb >= 3)
+
+
+def tip_extension(skel, labels, n_labels, *, back_px=config.TIP_BACK_PX,
+                  max_radius=config.TIP_MAX_RADIUS_PX):
+    """Length a skeleton leaves out at its objects' ends, in px per object.
+
+    The chain code runs from end pixel centre to end pixel centre, and a pruned skeleton
+    stops short of an end that is ragged, forked or blurred into the background (spurs
+    pruned, a layered crack's traces parting from their merged band). At each end pixel the
+    object is walked along the end's direction (the chord from the skeleton pixel
+    ``back_px`` steps back) to its edge, and its reach beyond the circle inscribed at the
+    end, plus the half of the end pixel, is added (:func:`semkit._kernels.tip_reach`). A
+    round or flat end, which the inscribed circle touches, adds half a pixel: a medial axis
+    ends at the centre of a round end, the end of a crack's centreline. An end on the image
+    border adds the stretch to the border.
+
+    Parameters
+    ----------
+    skel : (M, N) bool
+        Thin skeleton (ends are pixels with one skeleton neighbour).
+    labels : (M, N) int32
+        Object labels (0 = background).
+    n_labels : int
+        Highest label + 1.
+    back_px : int
+    max_radius : float
+        Inscribed radii are read up to this many px.
+
+    Returns
+    -------
+    extension_px : (n_labels,) ndarray of float64
+        Entry 0 is the background (0).
+
+    Examples
+    --------
+    >>> m = np.zeros((5, 30), bool); m[2, 5:25] = True     # a line of 20 pixels
+    >>> s = skeletonize(m); lab = m.astype(np.int32)
+    >>> float(skeleton_length(s, lab, 2)[1].round(2))       # 19 links
+    18.62
+    >>> float(tip_extension(s, lab, 2)[1])
+    1.0
+    """
+    skel, labels = _checked(skel, labels, n_labels)
+    ends, _ = skeleton_nodes(skel)
+    rr, cc = _kernels.pixel_coords(ends)
+    ext = np.zeros(rr.size, np.float64)
+    if rr.size:
+        _kernels.tip_reach(skel, labels, rr, cc, int(back_px), float(max_radius), ext)
+    out = np.bincount(labels[rr, cc], weights=ext, minlength=n_labels).astype(np.float64)
+    out[0] = 0.0
+    return out

@@ -55,12 +55,13 @@ def test_microct_surround_is_never_a_crack(microct):
     40 and numbers written anyway (issue 15)."""
     assert (microct.roi == "surround").all()
     assert microct.outside_region_px.sum() == 0
-    # at most two slices are flagged, each for a reason the slice shows: noise (slice 176
+    # at most three slices are flagged, each for a reason the slice shows: noise (slice 176
     # while its void was read on the fracture's plateaus: contrast 10.4 noise sigmas), faint
-    # lines (slice 0: 24 % of its length in the dark rims of bright inclusions, F1 0.68) or a
-    # darkest "mineral" lying largely in long narrow objects (slice 504's wide fracture)
+    # lines (slices 0 and 5: a fifth or more of their length in the dark rims of bright
+    # inclusions, F1 0.69 and 0.74, length 1.4x and 1.3x the truth) or a darkest "mineral"
+    # lying largely in long narrow objects (slice 504's wide fracture)
     flagged = microct[~microct.valid]
-    assert len(flagged) <= 2, flagged.image.tolist()
+    assert len(flagged) <= 3, flagged.image.tolist()
     noisy = flagged.valid_note.str.startswith("noise:")
     assert (flagged.contrast_to_noise[noisy] < config.MIN_CONTRAST_TO_NOISE).all()
     assert (noisy | flagged.valid_note.str.contains("long objects")
