@@ -166,13 +166,14 @@ SPUR_EXTRA_PX = 2.0
 #: least TRACE_MIN_DEPTH of the way from the local background to the crack grey; two valleys
 #: are two traces when the depth between them is TRACE_MIN_RISE of the shallower one's depth
 #: less than it (a share: thin traces are shallow by partial volume); cross-sections of
-#: half-width under TRACE_MIN_HALF_WIDTH_PX hold one trace; an object's length counts its mean
-#: number of traces when at least TRACE_MIN_SHARE of its centreline crosses two or more
-#: (chosen on the drawn-crack family).
+#: half-width under TRACE_MIN_HALF_WIDTH_PX hold one trace; a skeleton branch read at
+#: TRACE_MIN_BRANCH_SAMPLES or more centreline pixels counts its mean number of traces when at
+#: least TRACE_MIN_SHARE of them cross two or more (chosen on the drawn-crack family).
 TRACE_MIN_DEPTH = 0.35
 TRACE_MIN_RISE = 0.3
 TRACE_MIN_HALF_WIDTH_PX = 1.5
 TRACE_MIN_SHARE = 0.3
+TRACE_MIN_BRANCH_SAMPLES = 5
 TRACE_MAX_REACH_PX = 8.0
 #: a crack whose mean width (area / length) is below this many px is flagged `thin`.
 THIN_WIDTH_PX = 1.6

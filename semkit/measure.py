@@ -286,7 +286,8 @@ def mixed_area(image, labels, n, *, skeleton, background, crack_level, area_mask
 def parallel_traces(image, labels, n, *, skeleton, background, crack_level,
                     depth=config.TRACE_MIN_DEPTH, rise=config.TRACE_MIN_RISE,
                     min_half_width=config.TRACE_MIN_HALF_WIDTH_PX,
-                    min_share=config.TRACE_MIN_SHARE, max_reach=config.TRACE_MAX_REACH_PX):
+                    min_share=config.TRACE_MIN_SHARE, max_reach=config.TRACE_MAX_REACH_PX,
+                    min_samples=config.TRACE_MIN_BRANCH_SAMPLES):
     """Mean number of resolved parallel traces along each object (1 for a single trace).
 
     A layered shear crack is two or three thin traces a few pixels apart; the detect mask
@@ -295,10 +296,12 @@ def parallel_traces(image, labels, n, *, skeleton, background, crack_level,
     normal (:func:`semkit._kernels.cross_section_valleys`, every other centreline pixel):
     each valley at least ``depth`` of the way from the local background to the crack grey,
     parted from the next by a rise of ``rise`` times the shallower valley's depth, is a
-    trace. An object whose centreline crosses two or more traces over at least
-    ``min_share`` of its length counts the mean number of traces along it; others count 1
-    (a few split cross-sections are debris or noise, not a second trace). A wide open crack
-    has one valley, its flat void.
+    trace. Each skeleton branch (junction to junction or end) read at ``min_samples`` or
+    more centreline pixels, of which at least ``min_share`` cross two or more traces,
+    counts the mean number of traces along it; other branches count 1 (a few split
+    cross-sections are debris or noise, not a second trace). An object's factor is the mean
+    over its centreline, so one layered branch of a crack network counts its own traces. A
+    wide open crack has one valley, its flat void.
 
     Parameters
     ----------
@@ -312,6 +315,7 @@ def parallel_traces(image, labels, n, *, skeleton, background, crack_level,
     crack_level : float
         Crack core grey (``ThresholdResult.crack_level``).
     depth, rise, min_half_width, min_share, max_reach : float
+    min_samples : int
         See ``semkit.config`` (``TRACE_*``).
 
     Returns
@@ -346,10 +350,19 @@ def parallel_traces(image, labels, n, *, skeleton, background, crack_level,
                                    np.ascontiguousarray(background, np.float32), lab, skel,
                                    rr, cc, float(crack_level), float(depth), float(rise),
                                    float(min_half_width), float(max_reach), count)
-    at = lab[rr, cc]
-    tot = np.bincount(at, minlength=n + 1)[:n + 1]
-    multi = np.bincount(at, weights=count > 1, minlength=n + 1)[:n + 1]
-    mean = np.bincount(at, weights=count, minlength=n + 1)[:n + 1] / np.maximum(tot, 1)
-    use = (tot > 0) & (multi >= min_share * np.maximum(tot, 1))
-    traces[use] = mean[use]
+    # judged per branch (junction to junction or end): one layered branch of a crack
+    # network counts its traces, not the network's mean
+    _, junc = skeleton_nodes(skel)
+    br, nb = label_cracks(skel & ~junc)
+    at = br[rr, cc]
+    tot = np.bincount(at, minlength=nb + 1)
+    multi = np.bincount(at, weights=count > 1, minlength=nb + 1)
+    mean = np.bincount(at, weights=count, minlength=nb + 1) / np.maximum(tot, 1)
+    f = np.where((tot >= min_samples) & (multi >= min_share * tot), mean, 1.0)
+    f[0] = 1.0  # junction pixels
+    obj = lab[rr, cc]
+    traces_sum = np.bincount(obj, weights=f[at], minlength=n + 1)[:n + 1]
+    n_obj = np.bincount(obj, minlength=n + 1)[:n + 1]
+    hit = n_obj > 0
+    traces[hit] = traces_sum[hit] / n_obj[hit]
     return traces
