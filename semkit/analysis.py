@@ -668,6 +668,11 @@ class CrackAnalysis:
             notes.append(f"rejection: {share:.0%} of the dark area was judged by the zone and "
                          f"shape rules ({rules}{kept}); the figures depend on them: check the "
                          "overlay")
+        if row["n_cracks"] == 0 and self.options.reject and len(self.rejected):
+            kinds = self.rejected["rejected_as"].value_counts()
+            notes.append(f"nothing kept: the rules rejected every dark object detected "
+                         f"({', '.join(f'{v} {k}' for k, v in kinds.items())}), so the "
+                         "crack-free reading rests on them: check the overlay")
         return dict(valid=not notes, valid_note="; ".join(notes))
 
     def _saturated_share(self):

@@ -343,3 +343,28 @@ def test_dark_band_is_a_wide_smooth_band_short_of_the_void_and_darkest_inside():
             _row(**{**lath, "interior_share": 0.05})]
     ev = pd.DataFrame(rows, index=np.arange(1, len(rows) + 1))
     assert list(reject_objects(ev)) == ["dark_band", "", "", "", ""]
+
+
+def _short_line_image(with_line=True):
+    """A plain grey field (200, noise 3) holding, or not, one 30-px crack 1 px wide."""
+    import cv2
+    ss = 4
+    yy, xx = np.mgrid[0:200 * ss, 0:300 * ss] / ss
+    cov = ((np.abs(yy - 100) < 0.5) & (xx >= 135) & (xx < 165)).reshape(200, ss, 300, ss)
+    cov = cov.mean(axis=(1, 3)) * with_line
+    img = 200 - 150 * cv2.GaussianBlur(cov, (0, 0), 0.7)
+    img += np.random.default_rng(0).normal(0, 3, img.shape)
+    return np.clip(img, 0, 255).astype(np.uint8)
+
+
+def test_an_image_whose_every_object_is_rejected_is_flagged():
+    """Alone on a plain field, a short 1-px crack is shallow for the assumed crack grey and is
+    rejected as ``phase_rim``: the image reads no crack, so it is flagged, not valid; a plain
+    field with no dark object stays valid."""
+    from semkit.analysis import analyse_image
+    a = analyse_image(_short_line_image(), classify=False)
+    row = a.summary()
+    assert row["n_cracks"] == 0 and len(a.rejected) == 1
+    assert not row["valid"] and row["valid_note"].startswith("nothing kept")
+    row = analyse_image(_short_line_image(False), classify=False).summary()
+    assert row["n_cracks"] == 0 and row["valid"]
