@@ -5,7 +5,9 @@ diagonal steps by sqrt(2) over-reads (~5 %: a digital line of direction theta ha
 are straight or diagonal in proportions that make sqrt(2) too long on average). Kulpa's weights
 (0.948 for a straight step, 1.343 for a diagonal one) give an unbiased length for random
 orientations, to within about +-2.6 % for any single direction (Kulpa 1977; Dorst & Smeulders
-1987). Staircase corners (a diagonal link beside a 4-connected path) are counted once.
+1987). Staircase corners (a diagonal link beside a 4-connected path) are counted once. A
+skeleton also stops short of its object's ends; :func:`tip_extension` measures what it leaves
+out there, and a crack's length is the two together (:func:`semkit.measure.crack_table`).
 """
 from __future__ import annotations
 
@@ -227,8 +229,8 @@ def tip_extension(skel, labels, n_labels, *, back_px=config.TIP_BACK_PX,
     """Length a skeleton leaves out at its objects' ends, in px per object.
 
     The chain code runs from end pixel centre to end pixel centre, and a pruned skeleton
-    stops short of an end that is ragged, forked or blurred into the background (spurs
-    pruned, a layered crack's traces parting from their merged band). At each end pixel the
+    stops short of an end that is ragged or blurred into the background (its spurs pruned,
+    thinning eroding a faint tip). At each end pixel the
     object is walked along the end's direction (the chord from the skeleton pixel
     ``back_px`` steps back) to its edge, and its reach beyond the circle inscribed at the
     end, plus the half of the end pixel, is added (:func:`semkit._kernels.tip_reach`). A
