@@ -169,7 +169,7 @@ SPUR_EXTRA_PX = 2.0
 #: half-width under TRACE_MIN_HALF_WIDTH_PX hold one trace; a skeleton branch read at
 #: TRACE_MIN_BRANCH_SAMPLES or more centreline pixels counts its mean number of traces when at
 #: least TRACE_MIN_SHARE of them cross two or more (chosen on the drawn-crack family).
-TRACE_MIN_DEPTH = 0.35
+TRACE_MIN_DEPTH = 0.25
 TRACE_MIN_RISE = 0.3
 TRACE_MIN_HALF_WIDTH_PX = 1.5
 TRACE_MIN_SHARE = 0.3
