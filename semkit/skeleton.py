@@ -217,6 +217,8 @@ def skeleton_nodes(skel):
     """
     import cv2
     s = np.ascontiguousarray(skel, np.uint8)
+    if s.size == 0:
+        return np.zeros(s.shape, bool), np.zeros(s.shape, bool)
     k = np.ones((3, 3), np.float32)
     k[1, 1] = 0
     nb = cv2.filter2D(s, cv2.CV_16S, k, borderType=cv2.BORDER_CONSTANT)

@@ -100,6 +100,9 @@ def test_tip_extension_round_ends_border_and_loops():
     yy, xx = np.mgrid[0:80, 0:80]
     ring = np.abs(np.hypot(xx - 40, yy - 40) - 25) <= 1.5
     assert _with_tips(ring)[1] == 0.0
+    # an empty image has none either
+    empty = np.zeros((0, 0), bool)
+    assert tip_extension(empty, empty.astype(np.int32), 1).tolist() == [0.0]
 
 
 @pytest.mark.parametrize("radius,width", [(25, 1.0), (60, 3.0), (100, 5.0)])
