@@ -1002,11 +1002,11 @@ def tip_reach(skel, labels, rr, cc, back_px, max_radius, out):
     """How far each skeleton end's object reaches beyond the circle inscribed at the end.
 
     At end pixel ``(rr[k], cc[k])`` the direction is the chord from the skeleton pixel
-    ``back_px`` steps back along the branch (fewer where a junction comes first; none, and
-    ``out[k] = 0``, under 2) to the end. Along it the object (same label) is sampled in
-    0.25-px steps to its edge: reach ``t`` (to within 0.125 px). The inscribed radius ``r``
-    is the distance to the nearest pixel outside the object, less half a pixel (at most
-    ``max_radius``).
+    ``back_px`` links back along the branch (:func:`_links`; fewer where a junction comes
+    first; none, and ``out[k] = 0``, under 2) to the end. Along it the object (same label) is
+    sampled in 0.25-px steps to its edge: reach ``t`` (to within 0.125 px). The inscribed
+    radius ``r`` is the distance to the nearest pixel outside the object, less half a pixel
+    (at most ``max_radius``).
     ``out[k] = max(t - r + 0.5, 0)``: the half of the end pixel the chain code leaves out, and
     the stretch of object the skeleton stops short of beyond the inscribed circle (none at a
     round or flat end, which the circle touches). An end whose object runs into the image
@@ -1014,56 +1014,40 @@ def tip_reach(skel, labels, rr, cc, back_px, max_radius, out):
 
     Parameters
     ----------
-    skel : (M, N) bool
+    skel : (M + 2, N + 2) uint8
+        0/1 thin skeleton with a 1-px zero border (as :func:`prune_spurs` takes it).
     labels : (M, N) int32
     rr, cc : (K,) int64
-        The skeleton's end pixels (exactly one skeleton neighbour).
+        The skeleton's end pixels, in ``labels``' coordinates.
     back_px : int
     max_radius : float
     out : (K,) float64
     """
-    h, w = skel.shape
-    vis_i = np.empty(back_px + 1, np.int64)
-    vis_j = np.empty(back_px + 1, np.int64)
+    h, w = labels.shape
+    nb_i = np.empty(8, np.int64)
+    nb_j = np.empty(8, np.int64)
     rad = int(max_radius) + 1
     for k in range(rr.size):
         i0 = rr[k]
         j0 = cc[k]
         lab = labels[i0, j0]
         out[k] = 0.0
-        vis_i[0] = i0
-        vis_j[0] = j0
-        pi = i0
-        pj = j0
+        # walk back along the branch (padded coordinates) while it runs on as one path
+        pi, pj = -1, -1
+        ci, cj = i0 + 1, j0 + 1
         n = 0
         while n < back_px:
-            cnt = 0
-            ni = -1
-            nj = -1
-            for a in range(max(pi - 1, 0), min(pi + 2, h)):
-                for b in range(max(pj - 1, 0), min(pj + 2, w)):
-                    if not skel[a, b]:
-                        continue
-                    seen = False
-                    for q in range(n + 1):
-                        if vis_i[q] == a and vis_j[q] == b:
-                            seen = True
-                            break
-                    if not seen:
-                        cnt += 1
-                        ni = a
-                        nj = b
-            if cnt != 1:
+            m = _links(skel, ci, cj, nb_i, nb_j)
+            if m != (1 if n == 0 else 2):
                 break
+            q = 0 if nb_i[0] != pi or nb_j[0] != pj else 1
+            pi, pj = ci, cj
+            ci, cj = nb_i[q], nb_j[q]
             n += 1
-            vis_i[n] = ni
-            vis_j[n] = nj
-            pi = ni
-            pj = nj
         if n < 2:
             continue
-        vy = float(i0 - pi)
-        vx = float(j0 - pj)
+        vy = float(i0 + 1 - ci)
+        vx = float(j0 + 1 - cj)
         nv = math.sqrt(vy * vy + vx * vx)
         vy /= nv
         vx /= nv

@@ -154,7 +154,7 @@ VS_DIAGONAL = 1.406
 VS_CORNER = 0.091
 #: a skeleton stops short of its object's ends: each end adds the object's reach beyond the
 #: circle inscribed there (``semkit.skeleton.tip_extension``), along the chord from the
-#: skeleton pixel TIP_BACK_PX steps back; inscribed radii are read up to TIP_MAX_RADIUS_PX.
+#: skeleton pixel TIP_BACK_PX links back; inscribed radii are read up to TIP_MAX_RADIUS_PX.
 TIP_BACK_PX = 6
 TIP_MAX_RADIUS_PX = 12.0
 #: spurs (junction-to-end skeleton branches) shorter than this many local half-widths, plus

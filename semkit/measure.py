@@ -116,13 +116,13 @@ def crack_table(labels, n, *, pixel_size_um, skeleton=None, area_mask=None, imag
     orient = (np.degrees(0.5 * np.arctan2(-2 * mxy, mxx - myy)) % 180.0)
     pore = is_pore(area_all, mxx, myy, mxy)
     if skeleton is not None:
+        ends, junc = skeleton_nodes(skeleton)
         length_px = skeleton_length(skeleton, labels, n + 1, estimator=length_estimator)
         if length_estimator != "count":  # ImageJ's habit counts pixels and nothing more
-            length_px = length_px + tip_extension(skeleton, labels, n + 1)
+            length_px = length_px + tip_extension(skeleton, labels, n + 1, ends=ends)
         # isolated skeleton pixels (tiny blobs) have no links: give them one pixel of length
         single = np.bincount(labels[skeleton], minlength=n + 1) > 0
         length_px = np.where(single & (length_px == 0), 1.0, length_px)
-        ends, junc = skeleton_nodes(skeleton)
         n_end = np.bincount(labels[ends], minlength=n + 1)
         jl, nj = label_cracks(junc)
         # a junction cluster counts once, for the object it lies in

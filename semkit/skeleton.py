@@ -226,7 +226,7 @@ def skeleton_nodes(skel):
     return sb & (nb == 1), sb & (nb >= 3)
 
 
-def tip_extension(skel, labels, n_labels, *, back_px=config.TIP_BACK_PX,
+def tip_extension(skel, labels, n_labels, *, ends=None, back_px=config.TIP_BACK_PX,
                   max_radius=config.TIP_MAX_RADIUS_PX):
     """Length a skeleton leaves out at its objects' ends, in px per object.
 
@@ -234,7 +234,7 @@ def tip_extension(skel, labels, n_labels, *, back_px=config.TIP_BACK_PX,
     stops short of an end that is ragged or blurred into the background (its spurs pruned,
     thinning eroding a faint tip). At each end pixel the
     object is walked along the end's direction (the chord from the skeleton pixel
-    ``back_px`` steps back) to its edge, and its reach beyond the circle inscribed at the
+    ``back_px`` links back) to its edge, and its reach beyond the circle inscribed at the
     end, plus the half of the end pixel, is added (:func:`semkit._kernels.tip_reach`). A
     round or flat end, which the inscribed circle touches, adds half a pixel: a medial axis
     ends at the centre of a round end, the end of a crack's centreline. An end on the image
@@ -248,6 +248,8 @@ def tip_extension(skel, labels, n_labels, *, back_px=config.TIP_BACK_PX,
         Object labels (0 = background).
     n_labels : int
         Highest label + 1.
+    ends : (M, N) bool, optional
+        The skeleton's end pixels (:func:`skeleton_nodes`), when already found.
     back_px : int
     max_radius : float
         Inscribed radii are read up to this many px.
@@ -267,11 +269,14 @@ def tip_extension(skel, labels, n_labels, *, back_px=config.TIP_BACK_PX,
     1.0
     """
     skel, labels = _checked(skel, labels, n_labels)
-    ends, _ = skeleton_nodes(skel)
-    rr, cc = _kernels.pixel_coords(ends)
+    if ends is None:
+        ends, _ = skeleton_nodes(skel)
+    rr, cc = _kernels.pixel_coords(np.ascontiguousarray(ends, np.bool_))
     ext = np.zeros(rr.size, np.float64)
     if rr.size:
-        _kernels.tip_reach(skel, labels, rr, cc, int(back_px), float(max_radius), ext)
+        pad = np.zeros((skel.shape[0] + 2, skel.shape[1] + 2), np.uint8)
+        pad[1:-1, 1:-1] = skel
+        _kernels.tip_reach(pad, labels, rr, cc, int(back_px), float(max_radius), ext)
     out = np.bincount(labels[rr, cc], weights=ext, minlength=n_labels).astype(np.float64)
     out[0] = 0.0
     return out
