@@ -41,6 +41,13 @@ def _stage_name(stage):
     return str(stage)
 
 
+def _centreline_px(cracks):
+    """Each object's centreline length, px: ``length_px`` without its parallel traces
+    (``n_traces``), so the validity shares weigh what was detected, not how many layers a
+    merged band was read to hold."""
+    return cracks["length_px"].to_numpy(float) / cracks["n_traces"].to_numpy(float)
+
+
 class _FirstReading(typing.NamedTuple):
     """The rejection rules' reading of the objects before :attr:`CrackAnalysis.labels` cuts
     any: the evidence and verdicts of those objects, per new label where each came from
@@ -633,13 +640,13 @@ class CrackAnalysis:
                          "cracks and faint cracks are lost)")
         faint = self._faint_length_share()
         if faint >= config.FAINT_MAX_LENGTH_SHARE:
-            notes.append(f"faint lines: {faint:.0%} of the crack length lies less than "
+            notes.append(f"faint lines: {faint:.0%} of the crack centreline lies less than "
                          f"{config.FAINT_LINE_DEPTH:g} of the crack contrast below its "
                          "surroundings (grain boundaries or faint cracks): check the overlay")
         speck = self._speckle_length_share()
         if speck >= config.SPECKLE_MAX_LENGTH_SHARE:
             win = config.ZONE_NEIGHBOUR_WINDOW_PX
-            notes.append(f"specks: {speck:.0%} of the crack length lies in short objects "
+            notes.append(f"specks: {speck:.0%} of the crack centreline lies in short objects "
                          f"(under {config.SPECKLE_MAX_LENGTH_PX:g} px) with "
                          f"{config.SPECKLE_MIN_NEIGHBOURS} or more others in the "
                          f"{win} x {win} px window around them: a speckled texture (dusty "
@@ -648,7 +655,7 @@ class CrackAnalysis:
         cont = self._continuation_share()
         if cont >= config.CONTINUATION_MAX_SHARE:
             notes.append(f"faint continuations: ridge lines carry on from the detected cracks "
-                         f"({cont:.2f} px per px of crack length) where the threshold found "
+                         f"({cont:.2f} px per px of crack centreline) where the threshold found "
                          "nothing: faint parts of the cracks or grain boundaries they meet "
                          "(pieces at least 0.2 of the contrast deep are counted as crack): "
                          "check the overlay")
@@ -683,9 +690,10 @@ class CrackAnalysis:
         return float(np.count_nonzero(v == v.max())) / v.size if v.size else 0.0
 
     def _faint_length_share(self):
-        """Share of the crack length in objects whose core lies less than
-        ``FAINT_LINE_DEPTH`` of the contrast below their darker side (``side_depth``); 0 when
-        the rejection rules are off (no evidence is measured then). The objects rejected as
+        """Share of the crack centreline length (:func:`_centreline_px`) in objects whose core
+        lies less than ``FAINT_LINE_DEPTH`` of the contrast below their darker side
+        (``side_depth``); 0 when the rejection rules are off (no evidence is measured then).
+        The objects rejected as
         ``phase_edge`` (all faint) count with the cracks: the rule removes the boundary
         segments on a step between phases, not the evidence that boundaries in this image
         are as dark as faint cracks (a stress image whose boundaries read length +103 % fell
@@ -695,21 +703,21 @@ class CrackAnalysis:
         o = self._classified_objects
         c = o[o["rejected_as"].isin(["", "phase_edge"])]
         depth = self.evidence["side_depth"].reindex(c["crack_id"]).to_numpy()
-        length = c["length_px"].to_numpy()
+        length = _centreline_px(c)
         total = float(length.sum())
         return float(length[depth < config.FAINT_LINE_DEPTH].sum()) / total if total > 0 else 0.0
 
     def _speckle_length_share(self):
-        """Share of the crack length in short objects (skeleton under
-        ``SPECKLE_MAX_LENGTH_PX``) with ``SPECKLE_MIN_NEIGHBOURS`` or more other objects
-        around them (``neighbours`` of :func:`semkit.reject.object_evidence`); 0 when the
-        rejection rules are off (no evidence is measured then). Cracks, even a network with
-        its debris, are few long objects; specks in a dusty or altered grain are many short
-        ones together."""
+        """Share of the crack centreline length (:func:`_centreline_px`) in short objects
+        (centreline under ``SPECKLE_MAX_LENGTH_PX``) with ``SPECKLE_MIN_NEIGHBOURS`` or more
+        other objects around them (``neighbours`` of :func:`semkit.reject.object_evidence`);
+        0 when the rejection rules are off (no evidence is measured then). Cracks, even a
+        network with its debris, are few long objects; specks in a dusty or altered grain are
+        many short ones together."""
         if not self.options.reject or self.cracks.empty or not self.options.length:
             return 0.0
         c = self.cracks
-        length = c["length_px"].to_numpy(float)
+        length = _centreline_px(c)
         crowd = self.evidence["neighbours"].reindex(c["crack_id"]).to_numpy()
         short = (length < config.SPECKLE_MAX_LENGTH_PX) & (crowd >= config.SPECKLE_MIN_NEIGHBOURS)
         total = float(length.sum())
@@ -717,14 +725,15 @@ class CrackAnalysis:
 
     def _continuation_share(self):
         """Pixels of ridge lines that touch a detected object but run on more than 2 px
-        from every detected pixel, per px of crack length (0 without the ridge detector, a
-        segmenter or a length): how much of the cracks' continuation was left out. Objects
-        the rules rejected count as detected: a crack in a dark mineral rejected as
-        ``dark_phase`` and carried on by a ridge line is a crack found in part (development
-        seed 10: 0.18; counting accepted cracks only, 0.07). The continuation pieces the
-        ridge stage added (:func:`semkit.ridge.add_ridge_lines`) count as left out: they rest
-        on the ridge response alone, and a grain boundary carries a line on as well as a
-        crack (a test image of 30-px grains: three boundary pieces added)."""
+        from every detected pixel, per px of crack centreline (:func:`_centreline_px`; 0
+        without the ridge detector, a segmenter or a length): how much of the cracks'
+        continuation was left out. Objects the rules rejected count as detected: a crack in a
+        dark mineral rejected as ``dark_phase`` and carried on by a ridge line is a crack found
+        in part (development seed 10: 0.18; counting accepted cracks only, 0.07). The
+        continuation pieces the ridge stage added (:func:`semkit.ridge.add_ridge_lines`) count
+        as left out: they rest on the ridge response alone, and a grain boundary carries a
+        line on as well as a crack (a test image of 30-px grains: three boundary pieces
+        added)."""
         if self.ridge is None or self.options.segmenter is not None \
                 or not self.options.length:
             return 0.0
@@ -739,7 +748,7 @@ class CrackAnalysis:
         touching[lab[near & ridge]] = True
         touching[0] = False
         far = ridge & lookup(touching, lab) & ~cv2.dilate(det, np.ones((5, 5), np.uint8)).view(bool)
-        length = float(self.cracks["length_px"].sum()) if not self.cracks.empty else 0.0
+        length = float(_centreline_px(self.cracks).sum()) if not self.cracks.empty else 0.0
         return float(np.count_nonzero(far)) / length if length > 0 else 0.0
 
     def _void_gap(self):

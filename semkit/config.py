@@ -456,15 +456,16 @@ REJECT_BAND_MAX_WALL = 0.05
 #: an image whose zone and shape rules (all but phase_rim) rejected at least this share of the
 #: dark objects' area is flagged (valid = False): its figures rest on the rules
 REJECT_MAX_ZONE_SHARE = 0.2
-#: an image with at least FAINT_MAX_LENGTH_SHARE of its crack length in objects whose core
-#: lies less than FAINT_LINE_DEPTH of the contrast below their darker side is flagged: faint
-#: lines are grain boundaries as often as cracks (development family: a valid image with
+#: an image with at least FAINT_MAX_LENGTH_SHARE of its crack centreline length (each object
+#: once, its parallel traces not counted) in objects whose core lies less than
+#: FAINT_LINE_DEPTH of the contrast below their darker side is flagged: faint lines are grain
+#: boundaries as often as cracks (development family: a valid image with
 #: boundaries darkened by a third read length +38 % at 26 %; every other valid image <= 11 %,
 #: semkit.synth 1-px cracks 7-8 %, micro-CT tuning slices <= 4 %)
 FAINT_LINE_DEPTH = 0.2
 FAINT_MAX_LENGTH_SHARE = 0.2
-#: an image with at least SPECKLE_MAX_LENGTH_SHARE of its crack length in short objects
-#: (skeleton under SPECKLE_MAX_LENGTH_PX) with SPECKLE_MIN_NEIGHBOURS or more other objects
+#: an image with at least SPECKLE_MAX_LENGTH_SHARE of its crack centreline length in short
+#: objects (skeleton under SPECKLE_MAX_LENGTH_PX) with SPECKLE_MIN_NEIGHBOURS or more other objects
 #: in the ZONE_NEIGHBOUR_WINDOW_PX window around them is flagged: a speckled texture (dusty or
 #: altered grains, fluid inclusions, pitted surfaces), not a crack pattern (development and
 #: drawn families, micro-CT tuning slices, sample images: 0; the cracked dolomite
@@ -474,7 +475,7 @@ SPECKLE_MIN_NEIGHBOURS = 8
 SPECKLE_MAX_LENGTH_SHARE = 0.1
 #: an image whose ridge lines continue its detected cracks (pixels of a ridge line touching a
 #: crack, more than 2 px from every detected pixel) for at least this many px per px of crack
-#: length is flagged: the cracks were found only in part (development family: the under-read
+#: centreline is flagged: the cracks were found only in part (development family: the under-read
 #: images 0.15-0.19, every other image <= 0.045; 1-px hairlines blurred by 1.4 px: 14.5)
 CONTINUATION_MAX_SHARE = 0.1
 #: an image whose dark class's median grey (the crack grey detection works from) lies at least

@@ -115,3 +115,30 @@ def test_kernel_counts_valleys_parted_by_a_rise():
     sk[50, 11:69] = True
     t = parallel_traces(img, lab, 3, skeleton=sk, background=bg, crack_level=40.0)
     assert t[1:].tolist() == [2.0, 1.0, 1.0]
+
+
+def test_validity_shares_weigh_the_centreline_not_the_traces(monkeypatch):
+    """A layered crack (two 1.2-px traces 4 px apart, 160 px) beside a faint 2-px line: the
+    layered one is read as two traces (length about 302 px), the line (0.4 of the contrast,
+    about 252 px) as faint. The faint-line share is a share of what was detected, the
+    centreline: 252 / (151 + 252) = 0.63, not 252 / (302 + 252) = 0.45; and it is the same
+    when no trace is counted twice."""
+    import semkit.measure
+
+    img, _ = _render(_pair(4.0, 0.0, centre=(160.0, 60.0)))
+    line, _ = _render([(30.0, 150.0, 290.0, 150.0, 2.0)], noise=0.0)
+    img = np.clip(np.rint(img - 0.4 * (180.0 - line.astype(float))), 0, 255).astype(np.uint8)
+
+    def shares(a):
+        return a._faint_length_share(), a._speckle_length_share(), a._continuation_share()
+    a = analyse_image(img, pixel_size_um=1.0, classify=False, flatten="none")
+    c = a.cracks.sort_values("n_traces")
+    assert c.n_traces.tolist() == [1.0, 2.0]
+    faint = float(c.length_px.iloc[0])
+    assert shares(a)[0] == pytest.approx(faint / (faint + float(c.length_px.iloc[1]) / 2))
+    assert "faint lines" in a.summary()["valid_note"]
+    monkeypatch.setattr(semkit.measure, "parallel_traces",
+                        lambda image, labels, n, **kw: np.ones(n + 1))
+    b = analyse_image(img, pixel_size_um=1.0, classify=False, flatten="none")
+    assert b.cracks.n_traces.max() == 1.0
+    assert shares(b) == pytest.approx(shares(a))
