@@ -168,9 +168,11 @@ SPUR_EXTRA_PX = 2.0
 #: less than it (a share: thin traces are shallow by partial volume); cross-sections of
 #: half-width under TRACE_MIN_HALF_WIDTH_PX hold one trace; a skeleton branch read at
 #: TRACE_MIN_BRANCH_SAMPLES or more centreline pixels counts its mean number of traces when at
-#: least TRACE_MIN_SHARE of them cross two or more (chosen on the drawn-crack family).
+#: least TRACE_MIN_SHARE of them cross two or more (chosen on the drawn-crack family; the
+#: rise on the drawn and development families: 0.3 left blurred layers 4-5 px apart, parted
+#: by a rise of 0.17-0.3, counted once).
 TRACE_MIN_DEPTH = 0.25
-TRACE_MIN_RISE = 0.3
+TRACE_MIN_RISE = 0.15
 TRACE_MIN_HALF_WIDTH_PX = 1.5
 TRACE_MIN_SHARE = 0.3
 TRACE_MIN_BRANCH_SAMPLES = 5
