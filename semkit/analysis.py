@@ -693,11 +693,10 @@ class CrackAnalysis:
         """Share of the crack centreline length (:func:`_centreline_px`) in objects whose core
         lies less than ``FAINT_LINE_DEPTH`` of the contrast below their darker side
         (``side_depth``); 0 when the rejection rules are off (no evidence is measured then).
-        The objects rejected as
-        ``phase_edge`` (all faint) count with the cracks: the rule removes the boundary
-        segments on a step between phases, not the evidence that boundaries in this image
-        are as dark as faint cracks (a stress image whose boundaries read length +103 % fell
-        from 21 % to under the flag without them)."""
+        The objects rejected as ``phase_edge`` (all faint) count with the cracks: the rule
+        removes the boundary segments on a step between phases, not the evidence that
+        boundaries in this image are as dark as faint cracks (a stress image whose boundaries
+        read length +103 % fell from 21 % to under the flag without them)."""
         if not self.options.reject or self.cracks.empty or not self.options.length:
             return 0.0
         o = self._classified_objects
