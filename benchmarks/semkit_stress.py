@@ -24,10 +24,10 @@ Each image is scored against its exact truth (crack area by partial-volume cover
 of every drawn trace, each layer and step of a shear crack, as semkit measures a crack, and
 for reference of the crack paths, a layered crack once; for ``half size`` the truth in the
 original pixels). A *confidently wrong* image is marked ``valid`` but off by more than 25 % in
-area or length (against the traces). These conditions were chosen
-to find failures, and some of semkit's rules were set on them (the noise units and flag, scan
-lines, saturation, the working grey scale): the table shows what each condition does and
-whether semkit flags it, not an accuracy for unseen images.
+area or length (against the traces). These conditions were chosen to find failures, and some
+of semkit's rules were set on them (the noise units and flag, scan lines, saturation, the
+working grey scale): the table shows what each condition does and whether semkit flags it,
+not an accuracy for unseen images.
 
 Writes ``benchmarks/semkit_results/stress.json`` and prints a markdown table.
 

@@ -461,8 +461,8 @@ REJECT_MAX_ZONE_SHARE = 0.2
 #: an image with at least FAINT_MAX_LENGTH_SHARE of its crack centreline length (each object
 #: once, its parallel traces not counted) in objects whose core lies less than
 #: FAINT_LINE_DEPTH of the contrast below their darker side is flagged: faint lines are grain
-#: boundaries as often as cracks (development family: a valid image with
-#: boundaries darkened by a third read length +38 % at 26 %; every other valid image <= 11 %,
+#: boundaries as often as cracks (development family: a valid image with boundaries darkened
+#: by a third read length +38 % at 26 %; every other valid image <= 11 %,
 #: semkit.synth 1-px cracks 7-8 %, micro-CT tuning slices 3-24 %: slices 0 and 5 flagged at
 #: 24 and 20 % for the dark rims of bright inclusions)
 FAINT_LINE_DEPTH = 0.2

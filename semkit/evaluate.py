@@ -6,8 +6,8 @@ stopped, so pixel-wise scores mostly measure the brush. These scores compare cen
 * :func:`centreline_scores` — both masks are skeletonised; a skeleton pixel counts as found when
   it lies within ``tol_px`` of the *other mask* (precision: predicted skeleton near the truth;
   recall: truth skeleton near the prediction), and F1 of the two. Lengths are the skeleton
-  lengths of both masks measured the same way as a crack's (:func:`semkit.skeleton.
-  skeleton_length` plus :func:`semkit.skeleton.tip_extension`).
+  lengths of both masks measured the same way as a crack's
+  (:func:`semkit.skeleton.skeleton_length` plus :func:`semkit.skeleton.tip_extension`).
 * :func:`polyline_coverage` — the share of a hand-drawn polyline's length lying within
   ``tol_px`` of a detected crack (a crack traced by hand as a line, not painted).
 """
@@ -57,7 +57,8 @@ def centreline_scores(pred_mask, truth_mask, *, tol_px=2.0, valid_mask=None):
     -------
     scores : dict
         ``precision, recall, f1`` (NaN when undefined), ``length_pred_px, length_truth_px``
-        (skeleton lengths, :func:`semkit.skeleton.skeleton_length`), ``length_ratio``,
+        (skeleton lengths with their ends, as :func:`semkit.measure.crack_table` measures a
+        crack), ``length_ratio``,
         ``area_pred_px, area_truth_px, area_ratio``.
 
     Examples

@@ -232,14 +232,13 @@ def tip_extension(skel, labels, n_labels, *, ends=None, back_px=config.TIP_BACK_
 
     The chain code runs from end pixel centre to end pixel centre, and a pruned skeleton
     stops short of an end that is ragged or blurred into the background (its spurs pruned,
-    thinning eroding a faint tip). At each end pixel the
-    object is walked along the end's direction (the chord from the skeleton pixel
-    ``back_px`` links back) to its edge, and its reach beyond the circle inscribed at the
-    end, plus the half of the end pixel, is added (:func:`semkit._kernels.tip_reach`). A
-    flat end, which the inscribed circle touches, adds about half a pixel; a round end 1 to
-    1.5 px (the digitised circle falls short of the edge): a medial axis ends at the centre
-    of a round end, the end of a crack's centreline. An end on the image border adds the
-    stretch to the border.
+    thinning eroding a faint tip). At each end pixel the object is walked along the end's
+    direction (the chord from the skeleton pixel ``back_px`` links back) to its edge, and its
+    reach beyond the circle inscribed at the end, plus the half of the end pixel, is added
+    (:func:`semkit._kernels.tip_reach`). A flat end, which the inscribed circle touches, adds
+    about half a pixel; a round end 1 to 1.5 px (the digitised circle falls short of the
+    edge): a medial axis ends at the centre of a round end, the end of a crack's centreline.
+    An end on the image border adds the stretch to the border.
 
     Parameters
     ----------
