@@ -578,7 +578,9 @@ class CrackAnalysis:
         """The row this image contributes to ``images.csv`` (``seconds`` is set by the caller).
 
         ``area_T_um2, area_S_um2, area_M_um2, P, P_status`` come from the crack types
-        (P = A_T/A_S, Equ. 3-1); NaN with a status when the image is not typed.
+        (P = A_T/A_S, Equ. 3-1); NaN with a status when the image is not typed. A P that
+        the typing supports is still ``low_confidence`` when the row is not ``valid``: its
+        areas are what the flags question.
         """
         c = self.cracks
         o = self.objects
@@ -608,6 +610,10 @@ class CrackAnalysis:
                    pixel_size_note=self.pixel_size_note)
         row.update(self._damage_fields())
         row.update(self._validity(row))
+        if not row["valid"] and row["P_status"] == "ok":
+            # P = A_T / A_S rests on the areas the flags call into question
+            row["P_status"] = "low_confidence"
+            row["P_note"] = "the image's figures are not valid (valid_note)"
         return row
 
     def _threshold_fields(self):
@@ -696,11 +702,12 @@ class CrackAnalysis:
         The objects rejected as ``phase_edge`` (all faint) count with the cracks: the rule
         removes the boundary segments on a step between phases, not the evidence that
         boundaries in this image are as dark as faint cracks (a stress image whose boundaries
-        read length +103 % fell from 21 % to under the flag without them)."""
+        read length +103 % fell from 21 % to under the flag without them). So do those
+        rejected as ``noise``, for the same reason."""
         if not self.options.reject or self.cracks.empty or not self.options.length:
             return 0.0
         o = self._classified_objects
-        c = o[o["rejected_as"].isin(["", "phase_edge"])]
+        c = o[o["rejected_as"].isin(["", "phase_edge", "noise"])]
         depth = self.evidence["side_depth"].reindex(c["crack_id"]).to_numpy()
         length = _centreline_px(c)
         total = float(length.sum())
@@ -712,10 +719,12 @@ class CrackAnalysis:
         other objects around them (``neighbours`` of :func:`semkit.reject.object_evidence`);
         0 when the rejection rules are off (no evidence is measured then). Cracks, even a
         network with its debris, are few long objects; specks in a dusty or altered grain are
-        many short ones together."""
+        many short ones together. The objects rejected as ``noise`` count with the cracks:
+        the rule removes the specks, not the evidence that the image is speckled."""
         if not self.options.reject or self.cracks.empty or not self.options.length:
             return 0.0
-        c = self.cracks
+        o = self._classified_objects
+        c = o[o["rejected_as"].isin(["", "noise"])]
         length = _centreline_px(c)
         crowd = self.evidence["neighbours"].reindex(c["crack_id"]).to_numpy()
         short = (length < config.SPECKLE_MAX_LENGTH_PX) & (crowd >= config.SPECKLE_MIN_NEIGHBOURS)

@@ -407,6 +407,13 @@ REJECT_EDGE_DEPTH = 0.2
 REJECT_EDGE_STEP = 0.6
 REJECT_EDGE_MAX_SLENDERNESS = 8.0
 REJECT_EDGE_MIN_AREA_PX = 15
+#: an object whose core lies less than this many pixel-noise sigmas below the darker side
+#: around it, times the square root of its centreline length (px), cannot be told from noise
+#: (``noise``), unless it is a long line on a step between phases (side_step >=
+#: REJECT_EDGE_STEP, slenderness >= REJECT_RIM_MAX_SLENDERNESS: a thin crack along a phase
+#: boundary is shallow against the darker phase). Chosen on the drawn, development and stress
+#: sets (docs/semkit.md, step 5b)
+REJECT_NOISE_SNR = 12.0
 #: compact dark phase (biotite, opaque mineral): skeleton length under this many mean widths,
 #: at least this wide, and not reaching the crack core grey (an open void does: a pore)
 REJECT_COMPACT_SLENDERNESS = 3.0

@@ -50,6 +50,12 @@ Every cleaned object gets a few measures (:func:`object_evidence`):
   unit. A lath of a darker mineral is wide, uniform, stops short of the void and is darkest
   inside (``dark_band``); a crack as wide reaches the void, or is rough inside (debris,
   merged layers) or has darker walls than its middle.
+* ``depth_snr`` — the ``side_depth`` greys (the ring's 25th percentile minus the object's
+  20th) in pixel-noise sigmas, times the square root of the skeleton length in px: how far
+  the object stands out of the noise along its whole length. Under ``REJECT_NOISE_SNR`` it
+  is ``noise`` at any size (a speck or a bit of a grain boundary on a noisy image), unless
+  it is a long line on a step between phases (a thin crack along a boundary is shallow
+  against the darker phase).
 
 An object whose dark core reaches the crack core grey (``side_depth`` at least
 ``REJECT_ZONE_MAX_DEPTH``: an open, void- or epoxy-filled crack) is never rejected for its
@@ -121,10 +127,13 @@ RULES = (
      & (e.density >= config.REJECT_MOTTLED_DENSITY)
      & (e.neighbours >= config.REJECT_MOTTLED_NEIGHBOURS)
      & (e.side_depth < config.REJECT_ZONE_MAX_DEPTH)),
+    ("noise", lambda e: (e.depth_snr < config.REJECT_NOISE_SNR)
+     & ~((e.side_step >= config.REJECT_EDGE_STEP)
+         & (e.slenderness >= config.REJECT_RIM_MAX_SLENDERNESS))),
 )
 #: the size (px) from which a rule judges an object: REJECT_MIN_AREA_PX, except where the
 #: rule's evidence holds on smaller objects
-RULE_MIN_AREA_PX = {"phase_edge": config.REJECT_EDGE_MIN_AREA_PX}
+RULE_MIN_AREA_PX = {"phase_edge": config.REJECT_EDGE_MIN_AREA_PX, "noise": 0}
 
 
 def _label_percentiles(values, lab, n, qs, bins=256, std=True):
@@ -256,7 +265,7 @@ def object_evidence(labels, n, grey, *, crack_level, noise, skeleton=None, regio
     evidence : pandas.DataFrame
         Index 1..n: ``area_px, side_depth, side_step, encloses_px, hole_lift, rim_share,
         elongation, width_px, slenderness, winding, background_rel, density, neighbours,
-        texture, interior_share, interior_depth, interior_rough, wall_depth``.
+        texture, interior_share, interior_depth, interior_rough, wall_depth, depth_snr``.
     """
     import cv2
 
@@ -339,6 +348,7 @@ def object_evidence(labels, n, grey, *, crack_level, noise, skeleton=None, regio
                                 np.clip(np.rint(cx).astype(int), 0, lab.shape[1] - 1),
                                 config.ZONE_NEIGHBOUR_WINDOW_PX) - (area >= 5)
     texture = ring_sd / max(float(noise), 1e-6)
+    depth_snr = (ring_lo - core) / max(float(noise), 1e-6) * np.sqrt(np.maximum(sk, 1.0))
     # the interior: pixels at least REJECT_BAND_INTERIOR_PX inside the object (where a band
     # wide enough shows its core grey, whatever the blur); depths are read against the void
     # grey the areas use (the crack grey is a guess when no crack shows a plateau)
@@ -372,7 +382,8 @@ def object_evidence(labels, n, grey, *, crack_level, noise, skeleton=None, regio
                            background_rel=background_rel, density=density,
                            neighbours=neighbours, texture=texture,
                            interior_share=interior_share, interior_depth=interior_depth,
-                           interior_rough=interior_rough, wall_depth=wall_depth),
+                           interior_rough=interior_rough, wall_depth=wall_depth,
+                           depth_snr=depth_snr),
                       index=np.arange(n + 1))
     return ev.iloc[1:]
 

@@ -11,7 +11,7 @@ def _row(**kw):
                 hole_lift=float("nan"), rim_share=0.0, elongation=10.0, width_px=3.0,
                 slenderness=40.0, winding=1.0, background_rel=1.0, density=0.05, neighbours=0.0,
                 texture=1.0, interior_share=0.0, interior_depth=float("nan"),
-                interior_rough=float("nan"), wall_depth=float("nan"))
+                interior_rough=float("nan"), wall_depth=float("nan"), depth_snr=100.0)
     return {**base, **kw}
 
 
@@ -50,6 +50,39 @@ def test_phase_edge_needs_a_step_a_shallow_core_and_a_short_object():
         _row(area_px=small - 1, side_depth=0.1, side_step=0.9, width_px=2.0, slenderness=4),
     ], index=[1, 2, 3, 4, 5])
     assert list(reject_objects(ev)) == ["phase_edge", "", "", "", ""]
+
+
+def test_noise_is_an_object_too_faint_for_its_length_at_any_size():
+    """An object whose depth in noise sigmas times the root of its centreline length is under
+    REJECT_NOISE_SNR is ``noise``, however small (a 4-px speck is judged); one above it is
+    kept, and so is a long line on a step between phases (a 1-px crack of 38 px along a
+    boundary read 0.03 of the contrast below the darker phase); an object an earlier rule
+    names keeps that name."""
+    from semkit import config
+    z = config.REJECT_NOISE_SNR
+    ev = pd.DataFrame([
+        _row(area_px=4, width_px=1.0, slenderness=4, depth_snr=0.5 * z),
+        _row(area_px=4, width_px=1.0, slenderness=4, depth_snr=2.0 * z),
+        _row(area_px=400, depth_snr=0.9 * z),
+        _row(area_px=60, side_depth=0.1, width_px=3.0, slenderness=5, depth_snr=0.5 * z),
+        _row(area_px=66, side_depth=0.03, side_step=0.8, width_px=1.7, slenderness=23,
+             depth_snr=0.6 * z),
+        _row(area_px=66, side_depth=0.03, side_step=0.8, width_px=1.7, slenderness=11,
+             depth_snr=0.6 * z),
+    ], index=[1, 2, 3, 4, 5, 6])
+    assert list(reject_objects(ev)) == ["noise", "", "noise", "phase_rim", "", "noise"]
+
+
+def test_depth_snr_is_the_depth_in_noise_sigmas_times_the_root_of_the_length():
+    """A 1-px line 20 px long, 30 grey below flat rock, with a noise sigma of 2: its depth is
+    15 sigmas, read over 20 centreline px: 15 * sqrt(20)."""
+    from semkit.reject import object_evidence
+    grey = np.full((40, 50), 100.0, np.float32)
+    grey[20, 10:30] = 70.0
+    lab = np.zeros(grey.shape, np.int32)
+    lab[20, 10:30] = 1
+    ev = object_evidence(lab, 1, grey, crack_level=40.0, noise=2.0)
+    assert ev.loc[1, "depth_snr"] == pytest.approx(15.0 * np.sqrt(20.0), rel=1e-6)
 
 
 def test_a_lone_line_in_a_dark_zone_is_a_crack_and_counted_as_judged():
@@ -368,3 +401,34 @@ def test_an_image_whose_every_object_is_rejected_is_flagged():
     assert not row["valid"] and row["valid_note"].startswith("nothing kept")
     row = analyse_image(_short_line_image(False), classify=False).summary()
     assert row["n_cracks"] == 0 and row["valid"]
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_noise_rule_removes_specks_and_boundary_bits_not_the_cracks(seed, monkeypatch):
+    """A noisy ``semkit.synth`` image (noise 10 grey, 30-px grains with boundaries 0.3 of the
+    contrast deep): short dark specks and boundary bits pass the threshold all over it. Without
+    the ``noise`` rule the centreline precision is 0.53 / 0.46 (seeds 0 / 1) and the length
+    +85 / +80 %; with it 0.80 / 0.77 and +26 / +10 %, at the same recall (0.994 / 0.957). Both
+    images stay flagged for their noise."""
+    from semkit import config
+    from semkit.analysis import analyse_image
+    from semkit.evaluate import centreline_scores
+    from semkit.synth import make_sem_image
+    s = make_sem_image((384, 512), stage="post", seed=seed, noise_sigma=10.0,
+                       mean_grain_px=30.0, boundary_depth=0.3)
+    truth_length = float(s.cracks["trace_length_px"].sum())
+    out = {}
+    for rule in (True, False):
+        if not rule:
+            monkeypatch.setattr(config, "REJECT_NOISE_SNR", -np.inf)
+        a = analyse_image(s.image, pixel_size_um=1.0, stage="failure", classify=False)
+        row = a.summary()
+        out[rule] = (centreline_scores(a.crack_labels > 0, s.crack_mask > 0),
+                     row["crack_length_um"] / truth_length - 1, row["valid"],
+                     int((a.rejected_as == "noise").sum()))
+    (on, len_on, valid_on, n_on), (off, len_off, valid_off, n_off) = out[True], out[False]
+    assert n_on >= 30 and n_off == 0
+    assert on["precision"] >= 0.74 and off["precision"] <= 0.55
+    assert on["recall"] == pytest.approx(off["recall"], abs=1e-9)
+    assert len_on <= 0.3 and len_off >= 0.75
+    assert not valid_on and not valid_off

@@ -43,9 +43,11 @@ def test_a_crack_along_most_of_a_row_keeps_its_depth():
 
 
 def test_striped_image_reads_as_the_clean_one():
-    """Development image 1 (clean: 56 objects, length -6.5 % against its drawn traces) with
-    row offsets of 5 grey: 138 objects and length +12.7 % (valid) when they are kept;
-    removed: 64 objects, -5.8 %, within 2 points of the clean image."""
+    """Development image 1 (clean: 34 cracks, length -10.2 % against its drawn traces) with
+    row offsets of 5 grey: 67 cracks and length +0.0 % (valid; 71 stripe specks rejected as
+    ``noise``, 22 on the clean image) when they are kept; removed: 38 cracks, -10.3 %, within
+    2 points of the clean image. Before the ``noise`` rule the clean image read 56 objects
+    and -6.5 %, the kept stripes 138 and +12.7 %."""
     from semkit.analysis import analyse_image
     s = _scene()
     img, _ = _striped(s.image, 5.0)
@@ -58,9 +60,9 @@ def test_striped_image_reads_as_the_clean_one():
     _, err_clean = read(s.image)
     row, err = read(img)
     kept, err_kept = read(img, scan_lines=False)
-    assert abs(err - err_clean) < 0.02 and row["n_cracks"] < 90
+    assert abs(err - err_clean) < 0.02 and row["n_cracks"] < 45
     assert np.isfinite(row["scan_line_sigma"])
-    assert err_kept - err_clean > 0.15 and kept["n_cracks"] > 120
+    assert err_kept - err_clean > 0.08 and kept["n_cracks"] > 60
     assert np.isnan(kept["scan_line_sigma"])
 
 
