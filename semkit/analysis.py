@@ -777,8 +777,8 @@ class CrackAnalysis:
 
     def _zone_rejected_share(self):
         """Share of the dark objects' area (pores aside) that the zone and shape rules
-        decided: rejected, in all and per rule (``phase_rim``, a boundary segment, is not
-        counted), and kept only as lone lines in a dark zone (``lone_line``,
+        decided: rejected, in all and per rule (``phase_rim`` and ``phase_edge``, boundary
+        segments, are not counted; ``noise`` is), and kept only as lone lines in a dark zone (``lone_line``,
         :func:`semkit.reject.kept_lone_lines`): either way the figures rest on the rules."""
         o = self._classified_objects
         o = o[~o["is_pore"].to_numpy(bool)] if self.options.exclude_pores else o
