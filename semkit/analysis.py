@@ -724,7 +724,10 @@ class CrackAnalysis:
         if not self.options.reject or self.cracks.empty or not self.options.length:
             return 0.0
         o = self._classified_objects
-        c = o[o["rejected_as"].isin(["", "noise"])]
+        keep = o["rejected_as"].isin(["", "noise"])
+        if self.options.exclude_pores:  # pores are no cracks here, as in self.cracks
+            keep &= ~o["is_pore"]
+        c = o[keep]
         length = _centreline_px(c)
         crowd = self.evidence["neighbours"].reindex(c["crack_id"]).to_numpy()
         short = (length < config.SPECKLE_MAX_LENGTH_PX) & (crowd >= config.SPECKLE_MIN_NEIGHBOURS)
@@ -778,8 +781,9 @@ class CrackAnalysis:
     def _zone_rejected_share(self):
         """Share of the dark objects' area (pores aside) that the zone and shape rules
         decided: rejected, in all and per rule (``phase_rim`` and ``phase_edge``, boundary
-        segments, are not counted; ``noise`` is), and kept only as lone lines in a dark zone (``lone_line``,
-        :func:`semkit.reject.kept_lone_lines`): either way the figures rest on the rules."""
+        segments, are not counted; ``noise`` is), and kept only as lone lines in a dark zone
+        (``lone_line``, :func:`semkit.reject.kept_lone_lines`): either way the figures rest on
+        the rules."""
         o = self._classified_objects
         o = o[~o["is_pore"].to_numpy(bool)] if self.options.exclude_pores else o
         total = float(o["area_px"].sum())

@@ -411,8 +411,8 @@ REJECT_EDGE_MIN_AREA_PX = 15
 #: around it, times the square root of its centreline length (px), cannot be told from noise
 #: (``noise``), unless it is a long line on a step between phases (side_step >=
 #: REJECT_EDGE_STEP, slenderness >= REJECT_RIM_MAX_SLENDERNESS: a thin crack along a phase
-#: boundary is shallow against the darker phase). Chosen on the drawn, development and stress
-#: sets (docs/semkit.md, step 5b)
+#: boundary is shallow against the darker phase). Chosen on the drawn family (TRAIN and HELDOUT
+#: settings), the development family and the stress set (docs/semkit.md, step 5b)
 REJECT_NOISE_SNR = 12.0
 #: compact dark phase (biotite, opaque mineral): skeleton length under this many mean widths,
 #: at least this wide, and not reaching the crack core grey (an open void does: a pore)
@@ -462,8 +462,8 @@ REJECT_BAND_INTERIOR_SHARE = 0.15
 REJECT_BAND_DEPTH = 0.7
 REJECT_BAND_MAX_ROUGH = 5.0
 REJECT_BAND_MAX_WALL = 0.05
-#: an image whose zone and shape rules (all but phase_rim) rejected at least this share of the
-#: dark objects' area is flagged (valid = False): its figures rest on the rules
+#: an image whose zone and shape rules (all but phase_rim and phase_edge) rejected at least
+#: this share of the dark objects' area is flagged (valid = False): its figures rest on them
 REJECT_MAX_ZONE_SHARE = 0.2
 #: an image with at least FAINT_MAX_LENGTH_SHARE of its crack centreline length (each object
 #: once, its parallel traces not counted) in objects whose core lies less than

@@ -432,3 +432,24 @@ def test_noise_rule_removes_specks_and_boundary_bits_not_the_cracks(seed, monkey
     assert on["recall"] == pytest.approx(off["recall"], abs=1e-9)
     assert len_on <= 0.3 and len_off >= 0.75
     assert not valid_on and not valid_off
+
+
+def test_a_p_on_a_row_that_is_not_valid_is_low_confidence(monkeypatch):
+    """P = A_T / A_S rests on the areas: a P that the typing alone would report as ``ok`` is
+    ``low_confidence`` with a note when the image's row is not valid (held-out seed 7004,
+    flagged for its noise, read P 1.62x its truth as ``ok`` before), and stays ``ok`` on a
+    valid row."""
+    from semkit.analysis import CrackAnalysis, analyse_image
+    from semkit.synth import make_sem_image
+    s = make_sem_image((256, 320), stage="post", seed=3, n_cracks=4)
+    typed = dict(area_T_um2=2.0, area_S_um2=1.0, area_M_um2=0.0, P=2.0, P_status="ok",
+                 P_low=1.8, P_high=2.2, P_note="")
+    monkeypatch.setattr(CrackAnalysis, "_damage_fields", lambda self: dict(typed))
+    rows = {}
+    for valid in (True, False):
+        monkeypatch.setattr(CrackAnalysis, "_validity",
+                            lambda self, row, v=valid: dict(valid=v, valid_note="" if v else "x"))
+        rows[valid] = analyse_image(s.image, pixel_size_um=1.0, classify=False).summary()
+    assert rows[True]["P_status"] == "ok" and rows[True]["P_note"] == ""
+    assert rows[False]["P_status"] == "low_confidence" and "not valid" in rows[False]["P_note"]
+    assert rows[False]["P"] == 2.0  # still written: filter on P_status
