@@ -422,6 +422,61 @@ def label_extent(labels, n_labels, cos_t, sin_t, pmin, pmax):
 
 
 @njit
+def band_owners(labels, di, dj):
+    """Pixels near the objects and the object each is nearest to, from the object pixels out.
+
+    Every object pixel stamps its label on the pixels at the offsets ``(di, dj)`` (sorted by
+    distance); a pixel keeps the label of the first stamp at the smallest offset index, so an
+    object pixel owns itself and a band pixel takes its nearest object (ties: the first object
+    pixel in raster order).
+
+    Parameters
+    ----------
+    labels : (M, N) int
+        Objects 1..n, 0 background.
+    di, dj : (K,) int64
+        Offsets within the band (K < 255), sorted by length, ``(0, 0)`` first.
+
+    Returns
+    -------
+    idx : (P,) int64
+        Flat indices (raster order) of the pixels within the band of an object.
+    owner : (P,) int64
+        Their nearest object's label.
+    """
+    h, w = labels.shape
+    k = di.size  # < 255: the offsets of a small disk
+    best = np.full((h, w), 255, np.uint8)
+    own = np.empty((h, w), np.int32)
+    n = 0
+    for i in range(h):
+        for j in range(w):
+            lab = labels[i, j]
+            if lab <= 0:
+                continue
+            for t in range(k):
+                a = i + di[t]
+                b = j + dj[t]
+                if a < 0 or a >= h or b < 0 or b >= w:
+                    continue
+                if t < best[a, b]:
+                    if best[a, b] == 255:
+                        n += 1
+                    best[a, b] = t
+                    own[a, b] = lab
+    idx = np.empty(n, np.int64)
+    owner = np.empty(n, np.int64)
+    m = 0
+    for i in range(h):
+        for j in range(w):
+            if best[i, j] != 255:
+                idx[m] = i * w + j
+                owner[m] = own[i, j]
+                m += 1
+    return idx, owner
+
+
+@njit
 def fill_excluded(img, exclude, n_rings, band):
     """Grey under the excluded pixels, filled ring by ring from their known neighbours.
 

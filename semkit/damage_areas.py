@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from . import config
+from . import _kernels, config
 from .errors import InputError
 
 __all__ = ["darkness_fraction", "typed_areas", "PV_BAND_PX", "PV_BACKGROUND_SIGMA_PX"]
@@ -17,6 +17,17 @@ __all__ = ["darkness_fraction", "typed_areas", "PV_BAND_PX", "PV_BACKGROUND_SIGM
 PV_BAND_PX = config.PV_BAND_PX
 #: Gaussian sigma (px) of the local-background estimate for the partial-volume area.
 PV_BACKGROUND_SIGMA_PX = config.PV_BACKGROUND_SIGMA_PX
+
+
+def _disk_offsets(radius):
+    """Offsets (di, dj) with di^2 + dj^2 <= radius^2, sorted by length then raster order."""
+    r = int(np.floor(radius))
+    di, dj = np.mgrid[-r:r + 1, -r:r + 1]
+    di, dj = di.ravel(), dj.ravel()
+    keep = di * di + dj * dj <= radius * radius + 1e-9
+    di, dj = di[keep], dj[keep]
+    order = np.argsort(di * di + dj * dj, kind="stable")
+    return di[order].astype(np.int64), dj[order].astype(np.int64)
 
 
 def _band_darkness(image, crack_labels, *, core=None, band_px=PV_BAND_PX,
@@ -38,17 +49,26 @@ def _band_darkness(image, crack_labels, *, core=None, band_px=PV_BAND_PX,
     img = np.asarray(image)
     lab = np.asarray(crack_labels)
     obj = lab > 0
-    dist, near = cv2.distanceTransformWithLabels((~obj).astype(np.uint8), cv2.DIST_L2, 5,
-                                                 labelType=cv2.DIST_LABEL_PIXEL)
-    src = np.zeros(int(near.max()) + 1, lab.dtype)
-    src[near[obj]] = lab[obj]
-    idx = np.flatnonzero(dist <= band_px)
-    owner = src[near] if owner_image else src[near.ravel()[idx]]
+    di, dj = _disk_offsets(band_px)
+    if owner_image or di.size >= 255:
+        dist, near = cv2.distanceTransformWithLabels((~obj).astype(np.uint8), cv2.DIST_L2, 5,
+                                                     labelType=cv2.DIST_LABEL_PIXEL)
+        src = np.zeros(int(near.max()) + 1, lab.dtype)
+        src[near[obj]] = lab[obj]
+        idx = np.flatnonzero(dist <= band_px)
+        owner = src[near] if owner_image else src[near.ravel()[idx]]
+    else:
+        # a narrow band: stamped from the object pixels, no distance transform of the image
+        idx, owner = _kernels.band_owners(np.ascontiguousarray(lab), di, dj)
     if background is not None:
         bg = np.asarray(background).ravel()[idx].astype(np.float64)
     else:
         img64 = np.asarray(img, np.float64)
-        bg_mask = dist > band_px + 1
+        r = int(np.floor(band_px + 1))
+        disk = _disk_offsets(band_px + 1)
+        kernel = np.zeros((2 * r + 1, 2 * r + 1), np.uint8)
+        kernel[disk[0] + r, disk[1] + r] = 1
+        bg_mask = cv2.dilate(obj.astype(np.uint8), kernel) == 0
 
         def blur(a):
             return cv2.GaussianBlur(a.astype(np.float32), (0, 0), background_sigma_px,

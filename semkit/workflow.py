@@ -147,10 +147,42 @@ def write_masks(analysis, folder, stem):
         write_image(folder / f"{stem}_labels.tif", lab.astype(np.uint32))
 
 
+#: glibc ``mallopt`` parameters: (M_TRIM_THRESHOLD, M_MMAP_THRESHOLD) and the values set.
+_MALLOPT = ((-1, 1 << 30), (-3, 32 << 20))
+
+
+def keep_freed_memory():
+    """Let this process reuse the image-sized buffers it frees instead of returning them.
+
+    Every stage allocates and frees image-sized arrays (megabytes each). glibc's defaults
+    hand such blocks back to the kernel when they are freed, so the next one is faulted in
+    and zeroed again page by page: about a tenth of the time of a folder run. Here freed
+    heap memory is kept (trim threshold 1 GiB) and blocks up to 32 MiB come from the heap
+    (``mallopt``), so a process analysing image after image stays at its peak footprint and
+    reuses it. Does nothing where the C library has no ``mallopt`` (not glibc).
+
+    Returns
+    -------
+    bool
+        Whether the settings were applied.
+    """
+    import ctypes
+    import ctypes.util
+    try:
+        libc = ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6")
+        mallopt = libc.mallopt
+    except (OSError, AttributeError):
+        return False
+    mallopt.argtypes = [ctypes.c_int, ctypes.c_int]
+    return all(mallopt(param, value) == 1 for param, value in _MALLOPT)
+
+
 def _worker_init():
-    """One OpenCV thread per worker process: the processes are the parallelism."""
+    """One OpenCV thread per worker process (the processes are the parallelism); freed
+    image buffers kept for the next image (:func:`keep_freed_memory`)."""
     import cv2
     cv2.setNumThreads(1)
+    keep_freed_memory()
 
 
 def _run_shared(files, jobs, kwargs_of, done):
@@ -322,6 +354,7 @@ def analyse_folder(folder, out, *, jobs=None, progress=True, overlays=True, pixe
             write_tables(out, rows, cracks, order)
             last = time.monotonic()
 
+    keep_freed_memory()
     try:
         if jobs == 1:
             for p in files:

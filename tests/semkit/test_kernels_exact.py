@@ -128,3 +128,30 @@ def test_robust_median_is_numpys_to_the_last_bit():
             assert m == np.median(v) and m.dtype == np.median(v).dtype
             ref = 1.4826 * np.median(np.abs(v - np.median(v)))
             assert mad_sigma(v.copy()) == ref
+
+
+def test_band_owners_are_the_euclidean_band_and_nearest_object():
+    import cv2
+
+    from semkit.damage_areas import _disk_offsets
+    from semkit.measure import label_cracks
+    rng = np.random.default_rng(11)
+    m = cv2.dilate((rng.random((70, 90)) > 0.985).view(np.uint8), np.ones((3, 4), np.uint8))
+    lab, n = label_cracks(m.astype(bool))
+    assert n > 20
+    di, dj = _disk_offsets(2)
+    assert len(di) == 13 and (di[0], dj[0]) == (0, 0)
+    idx, owner = _kernels.band_owners(lab.astype(np.int32), di, dj)
+    # brute force: squared distance to every object, per pixel
+    rr, cc = np.mgrid[:lab.shape[0], :lab.shape[1]]
+    d2 = np.full((n + 1,) + lab.shape, 10 ** 9)
+    for k in range(1, n + 1):
+        pr, pc = np.nonzero(lab == k)
+        d2[k] = ((rr[..., None] - pr) ** 2 + (cc[..., None] - pc) ** 2).min(axis=-1)
+    best = d2[1:].min(axis=0)
+    assert np.array_equal(idx, np.flatnonzero(best <= 4))
+    near = d2[1:].argmin(axis=0).ravel()[idx] + 1
+    unique = ((d2[1:] == best).sum(axis=0) == 1).ravel()[idx]
+    assert unique.mean() > 0.95
+    assert np.array_equal(owner[unique], near[unique])
+    assert np.array_equal(owner[lab.ravel()[idx] > 0], lab.ravel()[idx][lab.ravel()[idx] > 0])

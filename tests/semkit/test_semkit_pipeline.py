@@ -235,3 +235,10 @@ def test_a_dead_worker_fails_only_the_images_it_held(tmp_path, n_files):
     assert all(rows[n][0]["error"].startswith("worker: ") for n in failed)
     assert sorted(rows) == names
     assert all(rows[n][0]["n_cracks"] > 0 for n in names if n not in failed)
+
+
+def test_folder_processes_keep_freed_memory_on_glibc():
+    import platform
+
+    from semkit.workflow import keep_freed_memory
+    assert keep_freed_memory() is (platform.libc_ver()[0] == "glibc")
