@@ -317,9 +317,10 @@ def _run(a):
     print(f"report: {os.path.join(a.out, 'report.html')} (and report.md)", file=sys.stderr)
     ts, ps = summary.get("test_summary") or {}, summary.get("P_sem") or {}
     if ts.get("P_sim") and ps.get("P_pooled") is not None:
+        flag = "" if ps.get("P_status", "ok") == "ok" else f" [{ps['P_status']}]"
         print(f"damage ratio P = A_T/A_S: SEM (pooled over loaded stages) {ps['P_pooled']:.2f}"
-              f"   simulated {a.test} {ts['P_sim'].get('by_area', float('nan')):.2f} (by area)",
-              file=sys.stderr)
+              f"{flag}   simulated {a.test} {ts['P_sim'].get('by_area', float('nan')):.2f}"
+              " (by area)", file=sys.stderr)
     return 0
 
 

@@ -104,9 +104,11 @@ def sem_damage(sem_dir):
     Returns
     -------
     damage : dict
-        ``{"by_stage": [{specimen, test, stage, P_mean, P_pooled}, ...], "P_pooled": float}``
-        where ``P_pooled`` pools A_T and A_S over every loaded (not pre-test) stage; empty when
-        semkit wrote no ``damage.csv``.
+        ``{"by_stage": [{specimen, test, stage, P_mean, P_pooled, P_status}, ...],
+        "P_pooled": float, "P_status": str, "P_note": str}`` where ``P_pooled`` pools A_T and
+        A_S over every loaded (not pre-test) stage, ``low_confidence`` when any loaded stage
+        is (semkit's ``damage.csv`` ``P_status``, which names the images); empty when semkit
+        wrote no ``damage.csv``.
     """
     import pandas as pd
 
@@ -116,9 +118,22 @@ def sem_damage(sem_dir):
     d = pd.read_csv(path)
     loaded = d[d["stage"].astype(str) != "pre-test"]
     a_t, a_s = float(loaded["area_T_um2"].sum()), float(loaded["area_S_um2"].sum())
+    if "P_status" not in d.columns:  # written by a semkit without stage statuses
+        d["P_status"] = "unchecked"
     rows = [{k: (None if pd.isna(r[k]) else r[k]) for k in
-             ("specimen", "test", "stage", "P_mean", "P_pooled")} for _, r in d.iterrows()]
-    return {"by_stage": rows, "P_pooled": a_t / a_s if a_s > 0 else None}
+             ("specimen", "test", "stage", "P_mean", "P_pooled", "P_status")}
+            for _, r in d.iterrows()]
+    low = loaded.loc[loaded["P_status"].astype(str) == "low_confidence", "stage"] \
+        if "P_status" in loaded.columns else loaded["stage"].iloc[:0]
+    status, note = "ok", ""
+    if len(low):
+        status = "low_confidence"
+        note = (f"low_confidence P at stage(s) {', '.join(map(str, low))} "
+                "(damage.csv P_note names the images)")
+    elif "P_status" not in loaded.columns:
+        status = "unchecked"
+    return {"by_stage": rows, "P_pooled": a_t / a_s if a_s > 0 else None,
+            "P_status": status, "P_note": note}
 
 
 def run(images_dir="sample_images", out="gbmgen_run", *, minerals=DEFAULT_MINERALS,

@@ -112,10 +112,13 @@ def write_run_report(out) -> tuple:
              f"{run.get('scenario')}; test {test}.")
 
     rep.heading("SEM measurement beside the simulation")
-    p_sem = (run.get("P_sem") or {}).get("P_pooled")
+    psem = run.get("P_sem") or {}
+    p_sem = psem.get("P_pooled")
     p_sim = (ts.get("P_sim") or {})
-    rows = [["damage ratio P = A_T/A_S (Equ. 3-1)", p_sem, p_sim.get("by_area"),
-             "SEM: pooled over the loaded stages; simulated: broken-bond area, tension/shear"],
+    how = "SEM: pooled over the loaded stages; simulated: broken-bond area, tension/shear"
+    if psem.get("P_status", "ok") != "ok":
+        how += f". SEM P is {psem['P_status']}: {psem.get('P_note') or 'see damage.csv'}"
+    rows = [["damage ratio P = A_T/A_S (Equ. 3-1)", p_sem, p_sim.get("by_area"), how],
             ["MHI (Equ. 4-3)", run.get("MHI_target"), run.get("MHI_realised"),
              "measured: the grains.csv semkit wrote; simulated: the specimen's grains"],
             ["H (Equ. 4-1)", meta.get("H_target"), meta.get("H_realised"), ""]]

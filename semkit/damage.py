@@ -214,6 +214,26 @@ def _stage_key(stage):
     return (STAGE_ORDER.index(s), s) if s in STAGE_ORDER else (len(STAGE_ORDER), s)
 
 
+def _stage_status(used, group, checked):
+    """``(P_status, P_note, n_low_confidence)`` of a stage from the images in its P_mean
+    (``used``) among all its images (``group``)."""
+    if not len(used):
+        why = ""
+        if checked:
+            counts = group["P_status"].astype(str).value_counts()
+            why = " (images: " + ", ".join(f"{n} {k}" for k, n in counts.items()) + ")"
+        return "no_p", f"no image of this stage gives a finite P{why}", 0
+    if not checked:
+        return "unchecked", "the images table has no P_status column", 0
+    low = used.loc[used["P_status"].astype(str) == "low_confidence", "image"].astype(str)
+    if not len(low):
+        return "ok", "", 0
+    names = ", ".join(low.iloc[:5]) + (", ..." if len(low) > 5 else "")
+    return ("low_confidence",
+            f"{len(low)} of the {len(used)} images in P_mean have a low_confidence P "
+            f"(their P_note says why): {names}", int(len(low)))
+
+
 def damage_table(images, manifest=None, *, z=OUTLIER_Z, min_n=OUTLIER_MIN_N):
     """Aggregate per-image P into ``damage.csv`` rows (specimen x test x stage).
 
@@ -236,7 +256,15 @@ def damage_table(images, manifest=None, *, z=OUTLIER_Z, min_n=OUTLIER_MIN_N):
         outlier_images, P_mean`` (mean of finite per-image P, outliers left out),
         ``P_mean_all`` (outliers kept), ``P_median, P_pooled`` (sum A_T / sum A_S over the
         non-outlier images, including those with A_S = 0; NaN without areas),
-        ``area_T_um2, area_S_um2``.
+        ``area_T_um2, area_S_um2, n_low_confidence, P_status, P_note``.
+
+    Notes
+    -----
+    A stage's P is only as sure as the images it averages. ``P_status`` is
+    ``low_confidence`` when any image whose P enters ``P_mean`` (finite, not an outlier) has
+    ``P_status`` ``low_confidence`` in ``images`` (``P_note`` names up to five of them, so
+    their own ``P_note`` says why), ``no_p`` when no image gives a finite P, ``unchecked``
+    when ``images`` has no ``P_status`` column, else ``ok``.
 
     Raises
     ------
@@ -272,6 +300,7 @@ def damage_table(images, manifest=None, *, z=OUTLIER_Z, min_n=OUTLIER_MIN_N):
         a_t = keep["area_T_um2"].sum() if has_area else np.nan
         a_s = keep["area_S_um2"].sum() if has_area else np.nan
         fin = np.isfinite(p_keep)
+        status, note, n_low = _stage_status(keep[fin], g, "P_status" in df.columns)
         rows.append(dict(
             specimen=spec, test=test, stage=stage, n_images=len(g),
             n_no_shear=int((~np.isfinite(p_all)).sum()),
@@ -281,7 +310,8 @@ def damage_table(images, manifest=None, *, z=OUTLIER_Z, min_n=OUTLIER_MIN_N):
             P_mean_all=float(np.nanmean(p_all)) if np.isfinite(p_all).any() else np.nan,
             P_median=float(np.median(p_keep[fin])) if fin.any() else np.nan,
             P_pooled=float(damage_ratio(a_t, a_s)) if has_area else np.nan,
-            area_T_um2=a_t, area_S_um2=a_s))
+            area_T_um2=a_t, area_S_um2=a_s, n_low_confidence=n_low, P_status=status,
+            P_note=note))
     dmg = pd.DataFrame(rows)
     if len(dmg):
         order = sorted(range(len(dmg)), key=lambda i: (str(dmg.specimen[i]), str(dmg.test[i]),
@@ -291,7 +321,8 @@ def damage_table(images, manifest=None, *, z=OUTLIER_Z, min_n=OUTLIER_MIN_N):
 
 
 def plot_p_by_stage(damage, path=None, *, ax=None):
-    """Plot P (mean per stage, outliers left out) by loading stage, one line per test.
+    """Plot P (mean per stage, outliers left out) by loading stage, one line per test; a
+    stage whose ``P_status`` is ``low_confidence`` is drawn hollow.
 
     Parameters
     ----------
@@ -313,9 +344,18 @@ def plot_p_by_stage(damage, path=None, *, ax=None):
     import matplotlib.pyplot as plt
     fig = ax.figure if ax is not None else plt.figure(figsize=(5, 3.5))
     ax = ax if ax is not None else fig.add_subplot(111)
+    any_low = False
     for (spec, test), g in damage.groupby(["specimen", "test"], sort=False):
         g = g.iloc[sorted(range(len(g)), key=lambda i: _stage_key(g.stage.iloc[i]))]
-        ax.plot(g["stage"].astype(str), g["P_mean"], "o-", label=f"{test} ({spec})")
+        line, = ax.plot(g["stage"].astype(str), g["P_mean"], "o-", label=f"{test} ({spec})")
+        if "P_status" in g.columns:
+            low = (g["P_status"] == "low_confidence").to_numpy()
+            if low.any():  # hollow markers over the stages whose P is low_confidence
+                any_low = True
+                ax.plot(g["stage"].astype(str)[low], g["P_mean"][low], "o", ms=9,
+                        mfc="white", mec=line.get_color(), mew=1.5)
+    if any_low:
+        ax.plot([], [], "o", mfc="white", mec="0.3", label="low_confidence (hollow)")
     ax.axhline(1.0, color="0.6", lw=0.8, ls="--")
     ax.set_xlabel("stage")
     ax.set_ylabel("P = A_T / A_S (Equ. 3-1)")

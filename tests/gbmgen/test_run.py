@@ -130,4 +130,7 @@ def test_run_whole_chain_sets_sem_p_beside_simulated_p(tmp_path, capsys):
     d = pd.read_csv(out / "semkit" / "damage.csv")
     failure = d[d["stage"] == "failure"].iloc[0]
     assert run["P_sem"]["P_pooled"] == pytest.approx(failure["area_T_um2"] / failure["area_S_um2"])
+    # the pooled P carries the loaded stage's status
+    assert run["P_sem"]["P_status"] == failure["P_status"]
+    assert (failure["P_status"] == "low_confidence") == ("low_confidence" in run["P_sem"]["P_note"])
     assert "simulated ucs" in capsys.readouterr().err

@@ -84,3 +84,31 @@ def test_pooled_ratio_and_manifest_join():
     assert list(dmg.stage) == ["initiating", "failure"]
     with pytest.raises(InputError, match="manifest"):
         damage_table(imgs, man.iloc[:2])
+
+
+def test_a_stage_p_is_low_confidence_when_an_image_in_its_mean_is(tmp_path):
+    imgs = table_3_3_images()
+    imgs["P_status"] = "ok"
+    # one low-confidence image at UCS failure; the triaxial outlier (6.05) is low_confidence
+    # too, but it is left out of P_mean, so its stage stays ok
+    imgs.loc[imgs.image == "ucs_failure_1.tif", "P_status"] = "low_confidence"
+    imgs.loc[imgs.P == 6.05, "P_status"] = "low_confidence"
+    _, dmg = damage_table(imgs)
+    st = {(r.test, r.stage): r for r in dmg.itertuples()}
+    f = st["ucs", "failure"]
+    assert (f.P_status, f.n_low_confidence) == ("low_confidence", 1)
+    assert "ucs_failure_1.tif" in f.P_note and "1 of the 2 images" in f.P_note
+    assert st["triaxial", "propagation"].P_status == "ok"
+    assert (dmg.P_status == "ok").sum() == 5
+    # no finite P, and a table without statuses
+    imgs.loc[imgs.stage == "initiating", "P"] = np.nan
+    _, dmg = damage_table(imgs)
+    ini = dmg[dmg.stage == "initiating"].iloc[0]
+    assert ini.P_status == "no_p" and "(images: 3 ok)" in ini.P_note
+    _, dmg = damage_table(table_3_3_images())
+    assert set(dmg.P_status) == {"unchecked"}
+    # the plot draws the low-confidence stage hollow
+    _, dmg = damage_table(imgs.fillna({"P": 1.0}))
+    fig = plot_p_by_stage(dmg, tmp_path / "p.png")
+    hollow = [ln for ln in fig.axes[0].lines if ln.get_markerfacecolor() == "white"]
+    assert len(hollow[0].get_xdata()) == 1 and (tmp_path / "p.png").exists()
