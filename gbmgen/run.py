@@ -116,21 +116,21 @@ def sem_damage(sem_dir):
     if not path.exists():
         return {}
     d = pd.read_csv(path)
-    loaded = d[d["stage"].astype(str) != "pre-test"]
-    a_t, a_s = float(loaded["area_T_um2"].sum()), float(loaded["area_S_um2"].sum())
     if "P_status" not in d.columns:  # written by a semkit without stage statuses
         d["P_status"] = "unchecked"
+    loaded = d[d["stage"].astype(str) != "pre-test"]
+    a_t, a_s = float(loaded["area_T_um2"].sum()), float(loaded["area_S_um2"].sum())
     rows = [{k: (None if pd.isna(r[k]) else r[k]) for k in
              ("specimen", "test", "stage", "P_mean", "P_pooled", "P_status")}
             for _, r in d.iterrows()]
-    low = loaded.loc[loaded["P_status"].astype(str) == "low_confidence", "stage"] \
-        if "P_status" in loaded.columns else loaded["stage"].iloc[:0]
+    statuses = loaded["P_status"].astype(str)
+    low = loaded.loc[statuses == "low_confidence", "stage"]
     status, note = "ok", ""
     if len(low):
         status = "low_confidence"
         note = (f"low_confidence P at stage(s) {', '.join(map(str, low))} "
                 "(damage.csv P_note names the images)")
-    elif "P_status" not in loaded.columns:
+    elif (statuses == "unchecked").any():
         status = "unchecked"
     return {"by_stage": rows, "P_pooled": a_t / a_s if a_s > 0 else None,
             "P_status": status, "P_note": note}

@@ -426,9 +426,9 @@ def band_owners(labels, di, dj):
     """Pixels near the objects and the object each is nearest to, from the object pixels out.
 
     Every object pixel stamps its label on the pixels at the offsets ``(di, dj)`` (sorted by
-    distance); a pixel keeps the label of the first stamp at the smallest offset index, so an
-    object pixel owns itself and a band pixel takes its nearest object (ties: the first object
-    pixel in raster order).
+    distance); a pixel keeps the label of the stamp with the smallest offset index, the first
+    such stamp in raster order of the object pixels. So an object pixel owns itself and a band
+    pixel takes its nearest object; at equal distance the offset listed first decides.
 
     Parameters
     ----------

@@ -156,13 +156,13 @@ def keep_freed_memory():
 
     Every stage allocates and frees image-sized arrays (megabytes each). glibc's defaults
     hand such blocks back to the kernel when they are freed, so the next one is faulted in
-    and zeroed again page by page (3-13 % of the CPU of a run, median 5 %, in paired runs
-    over the speed benchmark's images). Here freed heap memory is kept (trim threshold
-    1 GiB) and blocks up to 32 MiB come from the heap (``mallopt``), so a process analysing
-    image after image stays at its peak footprint and reuses it. :func:`analyse_folder`
-    sets it in its worker processes and in the calling process, which analyses images too;
-    the setting lasts for the life of the process. Does nothing where the C library has no
-    ``mallopt`` (not glibc).
+    and zeroed again page by page (3-11 % of the CPU, median 7 %, in five paired runs over
+    20 of the speed benchmark's images in one process). Here freed heap memory is kept
+    (trim threshold 1 GiB) and blocks up to 32 MiB come from the heap (``mallopt``), so a
+    process analysing image after image stays at its peak footprint and reuses it.
+    :func:`analyse_folder` sets it in its worker processes and in the calling process, which
+    analyses images too; the setting lasts for the life of the process. Does nothing where
+    the C library has no ``mallopt`` (not glibc).
 
     Returns
     -------
