@@ -1,10 +1,10 @@
 """Benchmark: are the thin traces semkit misses separable from grain boundaries by line contrast?
 
 On the 24 development images (``benchmarks/semkit_dev_family.py``), every drawn trace at most
-1.5 px wide is sampled every px and called *found* when the default analysis's centreline
-passes within 2 px, else *missed*; the grain-boundary pixels of the rendering at least 4 px
-from any crack are the third class. At each point (the maximum in its 3 x 3 box, as a
-trace's drawn position and the response's peak may differ by a pixel) three measures are
+1.5 px wide (median width) is sampled every px and called *found* when the default analysis's
+centreline passes within 2 px, else *missed*; the grain-boundary pixels of the rendering more
+than 4 px from any crack are the third class. At each point (the maximum in its 3 x 3 box, as
+a trace's drawn position and the response's peak may differ by a pixel) three measures are
 read on the denoised image the analysis uses:
 
 * ``ridge_snr`` — the per-pixel ridge response in its noise units
