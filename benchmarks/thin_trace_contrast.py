@@ -9,9 +9,9 @@ read on the denoised image the analysis uses:
 
 * ``ridge_snr`` — the per-pixel ridge response in its noise units
   (:func:`semkit.ridge.ridge_response`; seeds need 8, the hysteresis low level is 4);
-* ``line_snr`` — the oriented line response, the valley strength averaged along 8 px
-  (:func:`semkit.link.line_response`), in its noise units: what a filter that integrates
-  along the line gains;
+* ``line_snr`` — the oriented line response, the valley strength averaged along the line
+  under a Gaussian of sigma 8 px (:func:`semkit.link.line_response`), in its noise units:
+  what a filter that integrates along the line gains;
 * ``depth`` — depth below the local background as a share of the crack contrast
   (:func:`semkit.ridge.ridge_mask`; seeds need 0.2).
 
