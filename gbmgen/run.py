@@ -124,11 +124,12 @@ def sem_damage(sem_dir):
              ("specimen", "test", "stage", "P_mean", "P_pooled", "P_status")}
             for _, r in d.iterrows()]
     statuses = loaded["P_status"].astype(str)
-    low = loaded.loc[statuses == "low_confidence", "stage"]
+    low = loaded[statuses == "low_confidence"]
     status, note = "ok", ""
     if len(low):
         status = "low_confidence"
-        note = (f"low_confidence P at stage(s) {', '.join(map(str, low))} "
+        where = dict.fromkeys(f"{r.specimen} {r.test} {r.stage}" for r in low.itertuples())
+        note = (f"low_confidence P at {', '.join(where)} "
                 "(damage.csv P_note names the images)")
     elif (statuses == "unchecked").any():
         status = "unchecked"

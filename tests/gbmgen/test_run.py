@@ -134,3 +134,26 @@ def test_run_whole_chain_sets_sem_p_beside_simulated_p(tmp_path, capsys):
     assert run["P_sem"]["P_status"] == failure["P_status"]
     assert (failure["P_status"] == "low_confidence") == ("low_confidence" in run["P_sem"]["P_note"])
     assert "simulated ucs" in capsys.readouterr().err
+
+
+def test_sem_damage_pools_loaded_stages_and_names_each_flagged_stage_once(tmp_path):
+    from gbmgen.run import sem_damage
+    rows = [("S1", "ucs", "pre-test", 0.0, 0.0, "no_p"),
+            ("S1", "ucs", "failure", 30.0, 10.0, "low_confidence"),
+            ("S2", "ucs", "failure", 10.0, 30.0, "low_confidence"),
+            ("S2", "ucs", "initiating", 5.0, 10.0, "ok")]
+    d = pd.DataFrame(rows, columns=["specimen", "test", "stage", "area_T_um2", "area_S_um2",
+                                    "P_status"])
+    d["P_mean"] = d["P_pooled"] = d["area_T_um2"] / d["area_S_um2"].where(d["area_S_um2"] > 0)
+    d.to_csv(tmp_path / "damage.csv", index=False)
+    out = sem_damage(tmp_path)
+    assert out["P_pooled"] == pytest.approx(45.0 / 50.0)
+    assert out["P_status"] == "low_confidence"
+    assert "S1 ucs failure, S2 ucs failure " in out["P_note"]
+    # a table written without stage statuses is unchecked, not ok
+    d.drop(columns="P_status").to_csv(tmp_path / "damage.csv", index=False)
+    out = sem_damage(tmp_path)
+    assert (out["P_status"], out["P_note"]) == ("unchecked", "")
+    # all loaded stages ok
+    d.assign(P_status="ok").to_csv(tmp_path / "damage.csv", index=False)
+    assert sem_damage(tmp_path)["P_status"] == "ok"
