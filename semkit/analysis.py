@@ -703,11 +703,11 @@ class CrackAnalysis:
         removes the boundary segments on a step between phases, not the evidence that
         boundaries in this image are as dark as faint cracks (a stress image whose boundaries
         read length +103 % fell from 21 % to under the flag without them). So do those
-        rejected as ``noise``, for the same reason."""
+        rejected as ``noise`` and ``faint_texture``, for the same reason."""
         if not self.options.reject or self.cracks.empty or not self.options.length:
             return 0.0
         o = self._classified_objects
-        c = o[o["rejected_as"].isin(["", "phase_edge", "noise"])]
+        c = o[o["rejected_as"].isin(["", "phase_edge", "faint_texture", "noise"])]
         depth = self.evidence["side_depth"].reindex(c["crack_id"]).to_numpy()
         length = _centreline_px(c)
         total = float(length.sum())
@@ -719,12 +719,13 @@ class CrackAnalysis:
         other objects around them (``neighbours`` of :func:`semkit.reject.object_evidence`);
         0 when the rejection rules are off (no evidence is measured then). Cracks, even a
         network with its debris, are few long objects; specks in a dusty or altered grain are
-        many short ones together. The objects rejected as ``noise`` count with the cracks:
-        the rule removes the specks, not the evidence that the image is speckled."""
+        many short ones together. The objects rejected as ``noise`` and ``faint_texture``
+        count with the cracks: the rules remove the specks, not the evidence that the image
+        is speckled."""
         if not self.options.reject or self.cracks.empty or not self.options.length:
             return 0.0
         o = self._classified_objects
-        keep = o["rejected_as"].isin(["", "noise"])
+        keep = o["rejected_as"].isin(["", "faint_texture", "noise"])
         if self.options.exclude_pores:  # pores are no cracks here, as in self.cracks
             keep &= ~o["is_pore"]
         c = o[keep]
@@ -780,10 +781,10 @@ class CrackAnalysis:
 
     def _zone_rejected_share(self):
         """Share of the dark objects' area (pores aside) that the zone and shape rules
-        decided: rejected, in all and per rule (``phase_rim`` and ``phase_edge``, boundary
-        segments, are not counted; ``noise`` is), and kept only as lone lines in a dark zone
-        (``lone_line``, :func:`semkit.reject.kept_lone_lines`): either way the figures rest on
-        the rules."""
+        decided: rejected, in all and per rule (``phase_rim``, ``phase_edge`` and
+        ``faint_texture``, boundary segments and rim bits, are not counted; ``noise`` is), and
+        kept only as lone lines in a dark zone (``lone_line``,
+        :func:`semkit.reject.kept_lone_lines`): either way the figures rest on the rules."""
         o = self._classified_objects
         o = o[~o["is_pore"].to_numpy(bool)] if self.options.exclude_pores else o
         total = float(o["area_px"].sum())
@@ -794,7 +795,7 @@ class CrackAnalysis:
         lone_ids = lone.index[lone.to_numpy(bool)]
         is_lone = o["crack_id"].isin(lone_ids).to_numpy()
         why = o["rejected_as"].where(~is_lone, "lone_line")
-        zone = o[~why.isin(["", "phase_rim", "phase_edge"]).to_numpy()]
+        zone = o[~why.isin(["", "phase_rim", "phase_edge", "faint_texture"]).to_numpy()]
         if zone.empty:
             return 0.0, {}
         by_rule = (zone.groupby(why[zone.index])["area_px"].sum() / total).to_dict()

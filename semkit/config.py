@@ -407,6 +407,11 @@ REJECT_EDGE_DEPTH = 0.2
 REJECT_EDGE_STEP = 0.6
 REJECT_EDGE_MAX_SLENDERNESS = 8.0
 REJECT_EDGE_MIN_AREA_PX = 15
+#: a shallow, short object (``phase_rim``'s REJECT_SIDE_DEPTH and REJECT_RIM_MAX_SLENDERNESS,
+#: at any size and width) whose ring's quartiles lie at least this far apart, but less than
+#: REJECT_EDGE_STEP (a step between phases, judged by ``phase_edge``), is ``faint_texture``:
+#: no deeper than its surroundings vary
+REJECT_TEXTURE_STEP = 0.3
 #: an object whose core lies less than this many pixel-noise sigmas below the darker side
 #: around it, times the square root of its centreline length (px), cannot be told from noise
 #: (``noise``), unless it is a long line on a step between phases (side_step >=
@@ -462,8 +467,9 @@ REJECT_BAND_INTERIOR_SHARE = 0.15
 REJECT_BAND_DEPTH = 0.7
 REJECT_BAND_MAX_ROUGH = 5.0
 REJECT_BAND_MAX_WALL = 0.05
-#: an image whose zone and shape rules (all but phase_rim and phase_edge) rejected at least
-#: this share of the dark objects' area is flagged (valid = False): its figures rest on them
+#: an image whose zone and shape rules (all but phase_rim, phase_edge and faint_texture)
+#: rejected at least this share of the dark objects' area is flagged (valid = False): its
+#: figures rest on them
 REJECT_MAX_ZONE_SHARE = 0.2
 #: an image with at least FAINT_MAX_LENGTH_SHARE of its crack centreline length (each object
 #: once, its parallel traces not counted) in objects whose core lies less than

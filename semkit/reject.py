@@ -10,7 +10,10 @@ Every cleaned object gets a few measures (:func:`object_evidence`):
 * ``side_step`` — the ring's 75th minus its 25th percentile, in the same unit: small around
   an object inside one grain, large on a step between two phases. A short, shallow object on
   a step is the dark edge of a grain boundary (``phase_edge``), however thin; a crack along a
-  phase boundary is deeper or longer.
+  phase boundary is deeper or longer. A shallow, short object whose ring's quartiles lie
+  apart by less than a phase step but by at least ``REJECT_TEXTURE_STEP`` is no deeper than
+  its surroundings vary (``faint_texture``, at any size): a bit of the dark rim of an
+  inclusion or of a grain's texture, not a crack one can measure.
 * ``encloses_px``, ``hole_lift`` — area of the holes the object closes around, and how much
   brighter they are than the darker side outside (share of the contrast): a ring around a
   brighter grain is that grain's rim (a halo), however long; a crack network closing around a
@@ -130,10 +133,13 @@ RULES = (
     ("noise", lambda e: (e.depth_snr < config.REJECT_NOISE_SNR)
      & ~((e.side_step >= config.REJECT_EDGE_STEP)
          & (e.slenderness >= config.REJECT_RIM_MAX_SLENDERNESS))),
+    ("faint_texture", lambda e: (e.side_depth < config.REJECT_SIDE_DEPTH)
+     & (e.slenderness < config.REJECT_RIM_MAX_SLENDERNESS)
+     & (e.side_step >= config.REJECT_TEXTURE_STEP) & (e.side_step < config.REJECT_EDGE_STEP)),
 )
 #: the size (px) from which a rule judges an object: REJECT_MIN_AREA_PX, except where the
 #: rule's evidence holds on smaller objects
-RULE_MIN_AREA_PX = {"phase_edge": config.REJECT_EDGE_MIN_AREA_PX, "noise": 0}
+RULE_MIN_AREA_PX = {"phase_edge": config.REJECT_EDGE_MIN_AREA_PX, "faint_texture": 0, "noise": 0}
 
 
 def _label_percentiles(values, lab, n, qs, bins=256, std=True):

@@ -22,10 +22,12 @@ SHARED = real.shared_dir()
 pytestmark = pytest.mark.skipif(not (SHARED / "rock_microct_311H").is_dir(),
                                 reason=f"real images not present ({SHARED}; set ROCKKIT_SHARED)")
 
-#: measured 0.865 on the 30 held-out slices (0.848 before the void grey was read below
-#: plateaus that the fracture's cores undercut); the issue's target (0.85 on all 40) is not
-#: reached: 0.837 there
+#: measured 0.872 on the 30 held-out slices (0.868 before the ``faint_texture`` rule, 0.848
+#: before the void grey was read below plateaus that the fracture's cores undercut)
 MICROCT_F1_MEDIAN_MIN = 0.86
+#: the issue's target on all 40 slices, reached: 0.867 (0.845 before the ``faint_texture``
+#: rule)
+MICROCT_F1_MEDIAN_MIN_ALL = 0.85
 #: the issue's targets, reached: length within 15 % (median), no area above 2x the painting
 MICROCT_LENGTH_TOL = 0.15
 MICROCT_AREA_RATIO_MAX = 2.0
@@ -48,6 +50,7 @@ def test_microct_held_out_slices(microct):
     assert held.f1.median() >= MICROCT_F1_MEDIAN_MIN, held.f1.median()
     assert abs(held.reported_length_ratio.median() - 1) <= MICROCT_LENGTH_TOL
     assert held.reported_area_ratio.max() <= MICROCT_AREA_RATIO_MAX
+    assert microct.f1.median() >= MICROCT_F1_MEDIAN_MIN_ALL, microct.f1.median()
 
 
 def test_microct_surround_is_never_a_crack(microct):
@@ -58,7 +61,7 @@ def test_microct_surround_is_never_a_crack(microct):
     # at most three slices are flagged, each for a reason the slice shows: noise (slice 176
     # while its void was read on the fracture's plateaus: contrast 10.4 noise sigmas), faint
     # lines (slices 0 and 5: a fifth or more of their length in the dark rims of bright
-    # inclusions, F1 0.69 and 0.74, length 1.45x and 1.36x the truth) or a darkest "mineral"
+    # inclusions, F1 0.77 and 0.78, length 1.22x and 1.30x the truth) or a darkest "mineral"
     # lying largely in long narrow objects (slice 504's wide fracture)
     flagged = microct[~microct.valid]
     assert len(flagged) <= 3, flagged.image.tolist()
