@@ -923,18 +923,42 @@ def skeleton_window_sums(skel, aperture, mask, ends, dark, rr, cc, half, out):
 
 
 @njit
+def _bilinear(img, y, x):
+    """Bilinear grey of ``img`` at ``(y, x)``, the point clamped into the image."""
+    h, w = img.shape
+    if y < 0.0:
+        y = 0.0
+    elif y > h - 1.0:
+        y = h - 1.0
+    if x < 0.0:
+        x = 0.0
+    elif x > w - 1.0:
+        x = w - 1.0
+    y0 = min(int(y), h - 2) if h > 1 else 0
+    x0 = min(int(x), w - 2) if w > 1 else 0
+    fy = y - y0
+    fx = x - x0
+    y1 = min(y0 + 1, h - 1)
+    x1 = min(x0 + 1, w - 1)
+    return ((1 - fy) * ((1 - fx) * img[y0, x0] + fx * img[y0, x1])
+            + fy * ((1 - fx) * img[y1, x0] + fx * img[y1, x1]))
+
+
+@njit
 def cross_section_valleys(img, bg, labels, skel, rr, cc, crack_level, depth, rise, min_half,
-                          max_reach, out):
+                          max_reach, along, min_rise_grey, out):
     """Resolved parallel traces across each centreline pixel of an object.
 
     At centreline pixel ``(rr[k], cc[k])`` the line's direction is the principal axis of the
     object's centreline pixels in the 7 x 7 box around it; along the normal the object's
     extent is walked on each side (0.5-px steps, at most ``max_reach``), and the grey is
-    sampled (bilinear, 0.5-px steps) from 1.5 px beyond one side to 1.5 px beyond the other.
+    sampled (bilinear, 0.5-px steps) from 1.5 px beyond one side to 1.5 px beyond the other,
+    each sample the mean of ``2 * int(along) + 1`` points 1 px apart along the line.
     With ``d = (bg - grey) / (bg - crack_level)`` (``bg`` at the centreline pixel), a
     *valley* is a local maximum of ``d`` at least ``depth``; two valleys count apart when
-    ``d`` between them falls ``rise`` x the shallower one's ``d`` below it, else the deeper
-    stands for both. Cross-sections of half-width under ``min_half`` (one thin trace) read 1.
+    ``d`` between them falls ``rise`` x the shallower one's ``d`` below it, and by at least
+    ``min_rise_grey`` in grey, else the deeper stands for both. Cross-sections of
+    half-width under ``min_half`` (one thin trace) read 1.
 
     Parameters
     ----------
@@ -944,12 +968,13 @@ def cross_section_valleys(img, bg, labels, skel, rr, cc, crack_level, depth, ris
         The centreline pixels.
     rr, cc : (K,) int64
         The centreline pixels to read (all inside labelled objects).
-    crack_level, depth, rise, min_half, max_reach : float
+    crack_level, depth, rise, min_half, max_reach, along, min_rise_grey : float
     out : (K,) int32
         Receives the number of valleys (at least 1).
     """
     h, w = img.shape
     nmax = int(4 * (max_reach + 2.0)) + 3
+    n_along = int(along)
     d = np.empty(nmax, np.float32)
     keep = np.empty(nmax, np.int64)
     for k in range(rr.size):
@@ -984,6 +1009,8 @@ def cross_section_valleys(img, bg, labels, skel, rr, cc, crack_level, depth, ris
         th = 0.5 * math.atan2(2.0 * cxy, cxx - cyy)
         nx = -math.sin(th)
         ny = math.cos(th)
+        nx_t = math.cos(th)  # along the line: the grey is averaged over 2 * n_along + 1 px
+        ny_t = math.sin(th)
         # the object's extent along the normal, each side
         e_pos = 0.0
         e_neg = 0.0
@@ -1011,23 +1038,10 @@ def cross_section_valleys(img, bg, labels, skel, rr, cc, crack_level, depth, ris
         while t <= e_pos + 1.5 + 1e-9 and m < nmax:
             y = i + t * ny
             x = j + t * nx
-            if y < 0.0:
-                y = 0.0
-            elif y > h - 1.0:
-                y = h - 1.0
-            if x < 0.0:
-                x = 0.0
-            elif x > w - 1.0:
-                x = w - 1.0
-            y0 = min(int(y), h - 2) if h > 1 else 0
-            x0 = min(int(x), w - 2) if w > 1 else 0
-            fy = y - y0
-            fx = x - x0
-            y1 = min(y0 + 1, h - 1)
-            x1 = min(x0 + 1, w - 1)
-            v = ((1 - fy) * ((1 - fx) * img[y0, x0] + fx * img[y0, x1])
-                 + fy * ((1 - fx) * img[y1, x0] + fx * img[y1, x1]))
-            d[m] = (g0 - v) / den
+            v = 0.0
+            for u in range(-n_along, n_along + 1):
+                v += _bilinear(img, y + u * ny_t, x + u * nx_t)
+            d[m] = (g0 - v / (2 * n_along + 1)) / den
             m += 1
             t += 0.5
         nk = 0
@@ -1043,7 +1057,7 @@ def cross_section_valleys(img, bg, labels, skel, rr, cc, crack_level, depth, ris
                     if d[u] < low:
                         low = d[u]
                 shallow = min(d[p], d[q])
-                if shallow - low >= rise * shallow:
+                if shallow - low >= rise * shallow and shallow - low >= min_rise_grey / den:
                     keep[nk] = q
                     nk += 1
                 elif d[q] > d[p]:
