@@ -179,14 +179,15 @@ TRACE_MIN_BRANCH_SAMPLES = 5
 TRACE_MAX_REACH_PX = 8.0
 #: the cross-sections are read on the image before denoising (whose blur merges traces 2.5-3
 #: px apart), each sample the mean of 2 * TRACE_ALONG_PX + 1 points 1 px apart along the
-#: line: averaged along the traces, not across them (1 px left wide voids under noise of a
-#: fifth of the contrast split in two; chosen on the renderings of
-#: ``tests/semkit/test_parallel_traces.py``)
+#: line: averaged along the traces, not across them (under noise of a fifth of the contrast,
+#: an 8-px void read without this average split in two at four angles of four, with 1 px at
+#: one, with 2 px at none; chosen on the renderings of ``tests/semkit/test_parallel_traces.py``)
 TRACE_ALONG_PX = 2
 #: ... and two valleys count apart only when the rise between them is also at least this many
-#: sigmas of the noise of a difference of two such samples (the pixel noise times
-#: sqrt(2 / (2 * TRACE_ALONG_PX + 1))): a void's noisy floor is one trace (stress set, cracks
-#: of grey 80 at the development family's noise: seed 1 read +23 % at 0 sigmas, +4 % at 2)
+#: sigmas of the noise of a difference of two such samples (taken as the pixel noise times
+#: sqrt(2 / (2 * TRACE_ALONG_PX + 1)), an upper bound): a void's noisy floor is one trace
+#: (stress set, cracks of grey 80 at the development family's noise: seed 1 read +23 % at 0
+#: sigmas, +4 % at 2)
 TRACE_NOISE_Z = 2.0
 #: a crack whose mean width (area / length) is below this many px is flagged `thin`.
 THIN_WIDTH_PX = 1.6

@@ -196,7 +196,7 @@ def partial_volume_area(image, labels, n, *, background, crack_level, rim_px=1, 
     Parameters
     ----------
     image : (M, N) float
-        The grey image that was thresholded, before its denoising.
+        The grey image that was thresholded.
     labels : (M, N) int32 ; n : int
     background : (M, N) float
         Local background grey (``ThresholdResult.background``).
@@ -246,7 +246,7 @@ def mixed_area(image, labels, n, *, skeleton, background, crack_level, area_mask
     Parameters
     ----------
     image : (M, N) float
-        The grey image that was thresholded, before its denoising.
+        The grey image that was thresholded.
     labels : (M, N) int32 ; n : int
     skeleton : (M, N) bool
         Centrelines of the objects.
@@ -296,17 +296,18 @@ def parallel_traces(image, labels, n, *, skeleton, background, crack_level,
     length counts one trace. Across each centreline pixel the grey profile is read along the
     normal (:func:`semkit._kernels.cross_section_valleys`, every other centreline pixel),
     each sample averaged over ``2 * along + 1`` points 1 px apart along the line: the noise
-    is averaged along the traces while the profile across them keeps the image's
-    resolution (read it on the image before denoising: a 0.7-px blur merges traces 2.5-3 px
-    apart). Each valley at least ``depth`` of the way from the local background to the
-    crack grey, parted from the next by a rise of ``rise`` times the shallower valley's
-    depth and of ``noise_z`` sigmas of the noise of a difference of two such samples, is a
-    trace. Each skeleton branch (junction to junction or end) read at ``min_samples`` or
-    more centreline pixels, of which at least ``min_share`` cross two or more traces,
-    counts the mean number of traces along it; other branches count 1 (a few split
-    cross-sections are debris or noise, not a second trace). An object's factor is the mean
-    over its centreline, so one layered branch of a crack network counts its own traces. A
-    wide open crack has one valley, its flat void.
+    is averaged along the traces while the profile across them keeps the image's resolution
+    (read it on the image before denoising: a 0.7-px blur merges traces 2.5-3 px apart).
+    Each valley at least ``depth`` of the way from the local background to the crack grey,
+    parted from the next by a rise of ``rise`` times the shallower valley's depth and of
+    ``noise_z`` sigmas of the noise of a difference of two such samples (taken as ``noise *
+    sqrt(2 / (2 * along + 1))``: the bilinear read averages a little more, so the bound errs
+    towards one trace), is a trace. Each skeleton branch (junction to junction or end) read
+    at ``min_samples`` or more centreline pixels, of which at least ``min_share`` cross two
+    or more traces, counts the mean number of traces along it; other branches count 1 (a few
+    split cross-sections are debris or noise, not a second trace). An object's factor is the
+    mean over its centreline, so one layered branch of a crack network counts its own
+    traces. A wide open crack has one valley, its flat void.
 
     Parameters
     ----------

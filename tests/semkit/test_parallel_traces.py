@@ -66,9 +66,9 @@ def test_each_trace_of_a_layered_crack_counts(spacing, angle):
 @pytest.mark.parametrize("angle", [0.0, 30.0, 60.0, 90.0])
 def test_blurred_layers_count_apart(angle):
     """Two 1.2-px traces 5 px apart under a 1.6-px blur (noise 3 grey): the grey between
-    them rises little above the valleys. With
-    ``TRACE_MIN_RISE`` 0.15 the length is within 9 % of the drawn one (-4 to -5 %); a rise
-    of 0.3 read them as one trace over most of their length (-33 to -51 %)."""
+    them rises little above the valleys. With ``TRACE_MIN_RISE`` 0.15 the length is within
+    9 % of the drawn one (-4 to -5 %); a rise of 0.3 read them as one trace over most of
+    their length (-33 to -51 %)."""
     img, true_len = _render(_pair(5.0, angle), blur=1.6)
     c = analyse_image(img, pixel_size_um=1.0, classify=False, flatten="none").cracks
     assert len(c) == 1
