@@ -209,6 +209,13 @@ class CrackAnalysis:
         return crack_mask(img, method=self.options.threshold)
 
     @property
+    def _segmenter_threshold(self):
+        """The decision level on P(crack): ``segmenter_threshold`` when given, else the
+        segmenter's own."""
+        t = self.options.segmenter_threshold
+        return float(self.options.segmenter.threshold if t is None else t)
+
+    @property
     def _threshold(self):
         """:attr:`thresholded`, or None with a segmenter (its decision replaces the threshold's
         levels and background)."""
@@ -236,7 +243,7 @@ class CrackAnalysis:
             # the segmenter sees the image as it was trained on (surround unfilled: a filled
             # surround shifts its wide-scale features tens of pixels into the sample)
             p = seg.crack_probability(self.image)
-            det = area = np.asarray(p) >= seg.threshold
+            det = area = np.asarray(p) >= self._segmenter_threshold
         else:
             t = self.thresholded
             det, area = t.detect_mask, t.mask
@@ -622,7 +629,7 @@ class CrackAnalysis:
     def _threshold_fields(self):
         seg = self.options.segmenter
         if seg is not None:
-            return dict(threshold_method="segmenter", threshold_value=float(seg.threshold),
+            return dict(threshold_method="segmenter", threshold_value=self._segmenter_threshold,
                         threshold_ok=True, threshold_note="", contrast_to_noise=float("nan"))
         t = self.thresholded
         return dict(threshold_method=t.method, threshold_value=t.value, threshold_ok=bool(t.ok),

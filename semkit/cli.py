@@ -18,7 +18,7 @@ _ANALYSE_KEYS = ("threshold", "flatten", "denoise_sigma_px", "despeckle", "min_a
                  "max_hole_px", "length", "exclude_pores", "pixel_size_um", "jobs", "progress",
                  "overlays", "classify", "crack_model", "grains", "minerals", "classes",
                  "labels", "roi", "ridge", "link", "reject", "save_masks", "segmenter",
-                 "bright_cracks", "scan_lines", "area")
+                 "segmenter_threshold", "bright_cracks", "scan_lines", "area")
 
 
 def _version():
@@ -89,6 +89,9 @@ def _add_analyse(sub):
                    help="write masks/<stem>_cracks.png (0/255) and masks/<stem>_labels.png")
     p.add_argument("--segmenter", default=None, metavar="SEG.skops",
                    help="trained pixel classifier used instead of threshold and ridge")
+    p.add_argument("--segmenter-threshold", type=float, default=None, metavar="P",
+                   help="decision level on P(crack) in (0, 1) (default: the one the model "
+                        "records, 0.5 unless trained with --threshold)")
     p.add_argument("--classify", dest="classify", action="store_true", default=None,
                    help="type tensile/shear/mixed on every image (default: only on loaded "
                         "stages of manifest.csv)")
@@ -270,6 +273,8 @@ def _add_train_segmenter(sub):
     p.add_argument("--trees", type=int, default=None, metavar="N", help="trees (default 50)")
     p.add_argument("--sigma-max-px", type=float, default=None, metavar="PX",
                    help="largest feature scale, px (default 8)")
+    p.add_argument("--threshold", type=float, default=None, metavar="P",
+                   help="decision level on P(crack) recorded in the model (default 0.5)")
     p.add_argument("--jobs", type=int, default=None, metavar="N", help="threads (default all)")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--no-progress", dest="progress", action="store_false", default=True)
@@ -286,8 +291,8 @@ def _run_train_segmenter(args):
     if skipped:
         print(f"skipped {len(skipped)} image(s) without a label file: {', '.join(skipped)}",
               file=sys.stderr)
-    kw = {k: v for k, v in (("n_trees", args.trees), ("sigma_max", args.sigma_max_px))
-          if v is not None}
+    kw = {k: v for k, v in (("n_trees", args.trees), ("sigma_max", args.sigma_max_px),
+                            ("threshold", args.threshold)) if v is not None}
     seg = train_segmenter(images, labels, names=names, n_jobs=args.jobs, seed=args.seed,
                           progress=args.progress, **kw)
     save_segmenter(seg, args.out)

@@ -57,6 +57,10 @@ class AnalysisOptions:
     segmenter : object or None
         A trained pixel classifier (``crack_probability(grey) -> P(crack)`` and ``threshold``,
         e.g. from ``semkit.segmenter.load_segmenter``) used instead of threshold and ridge.
+    segmenter_threshold : float or None
+        Decision level on P(crack), in (0, 1), in place of the one the segmenter records
+        (``segmenter.threshold``): lower finds more of the faint cracks and more of what is not
+        crack. Only with ``segmenter``.
     roi : str
         Sample region: ``auto`` (data bar cropped, black / white surround removed), ``none``
         (whole image) or the path of a mask image (non-zero = sample); see :mod:`semkit.roi`.
@@ -94,6 +98,7 @@ class AnalysisOptions:
     link: bool = False
     reject: bool = True
     segmenter: object = None
+    segmenter_threshold: float | None = None
     bright_cracks: bool = False
     area: str = "mixed"
 
@@ -124,3 +129,9 @@ class AnalysisOptions:
                                     and hasattr(seg, "threshold")):
             raise InputError("segmenter: expected an object with crack_probability(grey) and "
                              "threshold")
+        t = self.segmenter_threshold
+        if t is not None:
+            if seg is None:
+                raise InputError("segmenter_threshold: needs a segmenter (--segmenter)")
+            if not 0.0 < t < 1.0:
+                raise InputError(f"segmenter_threshold: expected a probability in (0, 1), got {t}")

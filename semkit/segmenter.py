@@ -260,7 +260,8 @@ def train_segmenter(images, labels, *, names=None, sigma_min=SIGMA_MIN_PX,
     samples_per_class : int
         Pixels drawn per image for each of crack, not crack, and hard not crack.
     threshold : float
-        Decision threshold on P(crack) recorded in the model.
+        Decision threshold on P(crack) recorded in the model, in (0, 1) (``semkit analyse
+        --segmenter-threshold`` overrides it per run).
     n_jobs : int, optional
         Worker threads for training and prediction.
     progress : bool
@@ -274,7 +275,8 @@ def train_segmenter(images, labels, *, names=None, sigma_min=SIGMA_MIN_PX,
     Raises
     ------
     InputError
-        Mismatched shapes, label values outside {0, 1, 2}, or no pixel of a class.
+        Mismatched shapes, label values outside {0, 1, 2}, no pixel of a class, or a
+        threshold outside (0, 1).
     """
     from sklearn.ensemble import RandomForestClassifier
     from tqdm.auto import tqdm
@@ -286,6 +288,8 @@ def train_segmenter(images, labels, *, names=None, sigma_min=SIGMA_MIN_PX,
     if not n_trees >= 1 or not samples_per_class >= 1:
         raise InputError(f"n_trees, samples_per_class: expected >= 1, got {n_trees}, "
                          f"{samples_per_class}")
+    if not 0.0 < threshold < 1.0:
+        raise InputError(f"threshold: expected a probability in (0, 1), got {threshold}")
     feats = _feature_settings(sigma_min, sigma_max, num_sigma)
     rng = np.random.default_rng(seed)
     X, y = [], []

@@ -178,3 +178,63 @@ def test_analyse_applies_the_segmenter_to_the_image_it_was_trained_on(synth_pair
     np.testing.assert_array_equal(a.detection[0], want)
     filled = trained.crack_mask(a._work_image) & a.region.mask
     assert (filled != want).sum() > 0  # the test can tell the two apart
+
+
+def test_threshold_override_moves_the_decision_and_is_reported(synth_pair, trained):
+    """``segmenter_threshold`` replaces the model's decision level: the crack pixels are
+    exactly those with P(crack) at or above it, fewer at a higher level, and images.csv
+    reports the level used."""
+    from semkit.analysis import analyse_image
+    _, b = synth_pair
+    p = trained.crack_probability(b.image)
+    got = {}
+    for t in (0.3, 0.5, 0.8):
+        a = analyse_image(b.image, segmenter=trained, segmenter_threshold=t, roi="none")
+        np.testing.assert_array_equal(a.detection[0], p >= t)
+        assert a.summary()["threshold_value"] == t
+        got[t] = int(a.detection[0].sum())
+    assert got[0.3] > got[0.5] > got[0.8] > 0
+    default = analyse_image(b.image, segmenter=trained, roi="none")
+    assert default.summary()["threshold_value"] == trained.threshold
+    np.testing.assert_array_equal(default.detection[0], p >= trained.threshold)
+
+
+@pytest.mark.parametrize("kw, match", [
+    (dict(segmenter_threshold=0.5), "needs a segmenter"),
+    (dict(segmenter_threshold=1.0, segmenter="model"), r"in \(0, 1\)"),
+    (dict(segmenter_threshold=0.0, segmenter="model"), r"in \(0, 1\)")])
+def test_bad_segmenter_threshold_is_refused(trained, kw, match):
+    from semkit.options import AnalysisOptions
+    if kw.get("segmenter") == "model":
+        kw = dict(kw, segmenter=trained)
+    with pytest.raises(InputError, match=match):
+        AnalysisOptions(**kw)
+
+
+def test_cli_threshold_recorded_at_training_and_overridden_at_analysis(tmp_path, synth_pair):
+    import pandas as pd
+
+    from semkit.cli import main
+    from semkit.io import write_image
+    a, b = synth_pair
+    for d in ("img", "lab", "new"):
+        (tmp_path / d).mkdir()
+    write_image(tmp_path / "img" / "a.png", a.image)
+    write_image(tmp_path / "lab" / "a.png", (a.crack_mask * 255).astype(np.uint8))
+    write_image(tmp_path / "new" / "b.png", b.image)
+    out = tmp_path / "seg.skops"
+    assert main(["train-segmenter", str(tmp_path / "img"), "--labels", str(tmp_path / "lab"),
+                 "--binary-masks", "--out", str(out), "--trees", "4", "--threshold", "0.35",
+                 "--no-progress"]) == 0
+    assert load_segmenter(out).threshold == 0.35
+    for extra, want in (([], 0.35), (["--segmenter-threshold", "0.7"], 0.7)):
+        res = tmp_path / f"res{want}"
+        assert main(["analyse", str(tmp_path / "new"), "--out", str(res), "--segmenter",
+                     str(out), "--no-progress", *extra]) == 0
+        assert pd.read_csv(res / "images.csv").threshold_value.tolist() == [want]
+    # a level outside (0, 1): one error line, exit 2, no training done
+    bad = tmp_path / "bad.skops"
+    assert main(["train-segmenter", str(tmp_path / "img"), "--labels", str(tmp_path / "lab"),
+                 "--binary-masks", "--out", str(bad), "--threshold", "1.5",
+                 "--no-progress"]) == 2
+    assert not bad.exists()
