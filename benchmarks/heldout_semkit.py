@@ -135,8 +135,8 @@ def _one(args):
 
 def run(n=None, *, jobs=2, seed0=None, **options):
     import generator
-    kw = {} if seed0 is None else {"seed0": seed0}
-    cases = generator.heldout_set(**kw) if n is None else generator.heldout_set(n, **kw)
+    cases = generator.heldout_set(len(generator.SET_SHAPES) if n is None else n,
+                                  seed0=generator.SET_SEED if seed0 is None else seed0)
     with ProcessPoolExecutor(jobs) as ex:
         rows = list(ex.map(_one, [(s, sh, options) for s, sh in cases]))
     return rows, summarise(rows)
