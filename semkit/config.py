@@ -477,6 +477,8 @@ REJECT_ZONE_MAX_DEPTH = 0.85
 REJECT_BAND_INTERIOR_PX = 3.0
 REJECT_BAND_INTERIOR_SHARE = 0.15
 REJECT_BAND_DEPTH = 0.7
+#: (phase_rim spares a band as rough as REJECT_BAND_MAX_ROUGH over REJECT_BAND_INTERIOR_SHARE of it:
+#: merged layered traces or debris, where a grain's rim is smooth across)
 REJECT_BAND_MAX_ROUGH = 5.0
 REJECT_BAND_MAX_WALL = 0.05
 #: an image whose zone and shape rules (all but phase_rim, phase_edge and faint_texture)

@@ -92,6 +92,14 @@ def _lone_line(e):
             & (e.side_depth >= config.LONE_LINE_DEPTH))
 
 
+def _rough_band(e):
+    """A band wide enough to show its interior, rough inside (``interior_rough`` at least
+    ``REJECT_BAND_MAX_ROUGH``): layered traces merged into one band, or a crack with debris;
+    a grain's dark rim or halo is smooth across."""
+    return (e.interior_share >= config.REJECT_BAND_INTERIOR_SHARE) \
+        & (e.interior_rough >= config.REJECT_BAND_MAX_ROUGH)
+
+
 def _dark_zone(e):
     """In a dark phase, and not reaching the crack core grey: what ``dark_phase`` judges."""
     return (e.background_rel < config.REJECT_DARK_BACKGROUND) \
@@ -109,7 +117,7 @@ def kept_lone_lines(evidence, rejected_as):
 RULES = (
     ("phase_rim", lambda e: (e.side_depth < config.REJECT_SIDE_DEPTH)
      & (e.slenderness < config.REJECT_RIM_MAX_SLENDERNESS)
-     & (e.width_px >= config.REJECT_RIM_MIN_WIDTH_PX)),
+     & (e.width_px >= config.REJECT_RIM_MIN_WIDTH_PX) & ~_rough_band(e)),
     ("phase_edge", lambda e: (e.side_depth < config.REJECT_EDGE_DEPTH)
      & (e.side_step >= config.REJECT_EDGE_STEP)
      & (e.slenderness < config.REJECT_EDGE_MAX_SLENDERNESS)),

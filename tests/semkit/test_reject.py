@@ -512,3 +512,23 @@ def test_a_p_on_a_row_that_is_not_valid_is_low_confidence(monkeypatch):
     assert rows[True]["P_status"] == "ok" and rows[True]["P_note"] == ""
     assert rows[False]["P_status"] == "low_confidence" and "not valid" in rows[False]["P_note"]
     assert rows[False]["P"] == 2.0  # still written: filter on P_status
+
+
+def test_phase_rim_spares_a_band_rough_inside():
+    """A shallow, short band is a grain's dark rim (``phase_rim``) when it is smooth across;
+    one rough inside (``interior_rough`` at least REJECT_BAND_MAX_ROUGH over at least
+    REJECT_BAND_INTERIOR_SHARE of it) is layered traces merged into one band: drawn scene 11
+    (``benchmarks/semkit_drawn_family.py``), four parallel traces read as one 682-px band of
+    side depth 0.285, slenderness 8.5, interior 0.35 of it, roughness 8.5 noise sigmas."""
+    from semkit import config
+    band = dict(area_px=682.0, side_depth=0.285, side_step=0.1, width_px=9.0, slenderness=8.5,
+                elongation=6.3, interior_share=0.35, interior_depth=0.2, interior_rough=8.5,
+                wall_depth=0.09)
+    rough = config.REJECT_BAND_MAX_ROUGH
+    rows = [_row(**band),
+            _row(**{**band, "interior_rough": 0.9 * rough}),
+            _row(**{**band, "interior_rough": rough}),
+            _row(**{**band, "interior_share": 0.9 * config.REJECT_BAND_INTERIOR_SHARE}),
+            _row(**{**band, "interior_share": 0.0, "interior_rough": float("nan")})]
+    ev = pd.DataFrame(rows, index=np.arange(1, len(rows) + 1))
+    assert list(reject_objects(ev)) == ["", "phase_rim", "", "phase_rim", "phase_rim"]
