@@ -100,6 +100,17 @@ def _rough_band(e):
         & (e.interior_rough >= config.REJECT_BAND_MAX_ROUGH)
 
 
+def _clear_in_grain(e):
+    """Elongated (``elongation`` at least ``REJECT_RIM_CLEAR_ELONGATION``), inside one grain
+    (the ring's quartiles less than ``REJECT_TEXTURE_STEP`` apart) and far out of the noise
+    along its length (``depth_snr`` at least ``REJECT_RIM_CLEAR_SNR``): a piece of crack,
+    however shallow; a grain's rim lies on the step to the brighter grain, and a small pore
+    or dark speck in the grain is not elongated."""
+    return (e.side_step < config.REJECT_TEXTURE_STEP) \
+        & (e.depth_snr >= config.REJECT_RIM_CLEAR_SNR) \
+        & (e.elongation >= config.REJECT_RIM_CLEAR_ELONGATION)
+
+
 def _dark_zone(e):
     """In a dark phase, and not reaching the crack core grey: what ``dark_phase`` judges."""
     return (e.background_rel < config.REJECT_DARK_BACKGROUND) \
@@ -117,7 +128,7 @@ def kept_lone_lines(evidence, rejected_as):
 RULES = (
     ("phase_rim", lambda e: (e.side_depth < config.REJECT_SIDE_DEPTH)
      & (e.slenderness < config.REJECT_RIM_MAX_SLENDERNESS)
-     & (e.width_px >= config.REJECT_RIM_MIN_WIDTH_PX) & ~_rough_band(e)),
+     & (e.width_px >= config.REJECT_RIM_MIN_WIDTH_PX) & ~_rough_band(e) & ~_clear_in_grain(e)),
     ("phase_edge", lambda e: (e.side_depth < config.REJECT_EDGE_DEPTH)
      & (e.side_step >= config.REJECT_EDGE_STEP)
      & (e.slenderness < config.REJECT_EDGE_MAX_SLENDERNESS)),

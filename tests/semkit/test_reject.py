@@ -447,11 +447,13 @@ def _short_line_image(with_line=True):
     return np.clip(img, 0, 255).astype(np.uint8)
 
 
-def test_an_image_whose_every_object_is_rejected_is_flagged():
-    """Alone on a plain field, a short 1-px crack is shallow for the assumed crack grey and is
-    rejected as ``phase_rim``: the image reads no crack, so it is flagged, not valid; a plain
-    field with no dark object stays valid."""
+def test_an_image_whose_every_object_is_rejected_is_flagged(monkeypatch):
+    """Alone on a plain field, a short 1-px crack is shallow for the assumed crack grey; with
+    ``phase_rim``'s in-grain exception off it is rejected as ``phase_rim``: the image reads no
+    crack, so it is flagged, not valid; a plain field with no dark object stays valid."""
+    from semkit import config
     from semkit.analysis import analyse_image
+    monkeypatch.setattr(config, "REJECT_RIM_CLEAR_SNR", np.inf)
     a = analyse_image(_short_line_image(), classify=False)
     row = a.summary()
     assert row["n_cracks"] == 0 and len(a.rejected) == 1
@@ -521,9 +523,10 @@ def test_phase_rim_spares_a_band_rough_inside():
     (``benchmarks/semkit_drawn_family.py``), four parallel traces read as one 682-px band of
     side depth 0.285, slenderness 8.5, interior 0.35 of it, roughness 8.5 noise sigmas."""
     from semkit import config
+    # depth_snr under REJECT_RIM_CLEAR_SNR: the in-grain exception (tested below) stays out
     band = dict(area_px=682.0, side_depth=0.285, side_step=0.1, width_px=9.0, slenderness=8.5,
                 elongation=6.3, interior_share=0.35, interior_depth=0.2, interior_rough=8.5,
-                wall_depth=0.09)
+                wall_depth=0.09, depth_snr=0.8 * config.REJECT_RIM_CLEAR_SNR)
     rough = config.REJECT_BAND_MAX_ROUGH
     rows = [_row(**band),
             _row(**{**band, "interior_rough": 0.9 * rough}),
@@ -532,3 +535,34 @@ def test_phase_rim_spares_a_band_rough_inside():
             _row(**{**band, "interior_share": 0.0, "interior_rough": float("nan")})]
     ev = pd.DataFrame(rows, index=np.arange(1, len(rows) + 1))
     assert list(reject_objects(ev)) == ["", "phase_rim", "", "phase_rim", "phase_rim"]
+
+
+def test_phase_rim_spares_a_clear_elongated_object_inside_one_grain():
+    """A shallow, short object inside one grain (ring quartiles under REJECT_TEXTURE_STEP apart),
+    far out of the noise (``depth_snr`` at least REJECT_RIM_CLEAR_SNR) and elongated (at least
+    REJECT_RIM_CLEAR_ELONGATION) is a piece of crack; on a step it is a grain's rim, and a
+    compact one (a pore or speck: micro-CT slices 1-10, elongation 1.4-2.2) stays rejected.
+    The development family's crack pieces the rule rejected: depth_snr 13-73 (10-90 %), side
+    step 0.18-1.3; its other objects 1.7-15 and 0.56-3.6."""
+    from semkit import config
+    snr, step, el = config.REJECT_RIM_CLEAR_SNR, config.REJECT_TEXTURE_STEP, \
+        config.REJECT_RIM_CLEAR_ELONGATION
+    piece = dict(area_px=80.0, side_depth=0.23, side_step=0.5 * step, width_px=3.0,
+                 slenderness=6.0, elongation=2 * el, depth_snr=1.5 * snr)
+    rows = [_row(**piece),
+            _row(**{**piece, "depth_snr": 0.9 * snr}),
+            _row(**{**piece, "side_step": 0.2}),
+            _row(**{**piece, "elongation": 0.9 * el}),
+            _row(**{**piece, "side_step": 1.1 * step})]
+    ev = pd.DataFrame(rows, index=np.arange(1, len(rows) + 1))
+    assert list(reject_objects(ev)) == ["", "phase_rim", "", "phase_rim", "phase_rim"]
+
+
+def test_a_lone_short_crack_on_a_plain_field_is_kept_and_measured():
+    """The 30-px, 1-px crack of the flag test above is shallow for the assumed crack grey, but
+    alone in an even field, elongated and far out of the noise: kept. Its faint, blurred tips
+    fall under the detection level, so it reads 25.5 px (-15 %): a lower bound, within 20 %."""
+    from semkit.analysis import analyse_image
+    a = analyse_image(_short_line_image(), classify=False)
+    assert len(a.cracks) == 1 and a.rejected.empty
+    assert 24.0 <= float(a.cracks["length_px"].iloc[0]) <= 31.0
