@@ -407,7 +407,7 @@ REJECT_RIM_MIN_SHARE = 0.6
 #: ... and at least this wide (a blurred thin crack is shallow; its depth says little)
 REJECT_RIM_MIN_WIDTH_PX = 2.5
 #: ... unless it lies inside one grain (ring quartiles under REJECT_TEXTURE_STEP apart), this far
-#: out of the noise (depth_snr) and this elongated: a crack piece. Development family seeds 0-23:
+#: out of the noise (depth_snr) and this elongated: a crack piece. Development renderings 0-23:
 #: such objects the rule rejected were 26 on true cracks and 2 elsewhere; micro-CT slices 1-10: 1
 #: on the fracture, none elsewhere (without the elongation limit 5 pores and specks, elongation
 #: 1.4-2.2, were kept there)

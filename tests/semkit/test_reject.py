@@ -551,7 +551,7 @@ def test_phase_rim_spares_a_clear_elongated_object_inside_one_grain():
                  slenderness=6.0, elongation=2 * el, depth_snr=1.5 * snr)
     rows = [_row(**piece),
             _row(**{**piece, "depth_snr": 0.9 * snr}),
-            _row(**{**piece, "side_step": 0.2}),
+            _row(**{**piece, "side_step": 0.99 * step}),
             _row(**{**piece, "elongation": 0.9 * el}),
             _row(**{**piece, "side_step": 1.1 * step})]
     ev = pd.DataFrame(rows, index=np.arange(1, len(rows) + 1))
