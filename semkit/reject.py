@@ -92,6 +92,13 @@ def _lone_line(e):
             & (e.side_depth >= config.LONE_LINE_DEPTH))
 
 
+def _shallow_short(e):
+    """Shallow against its surroundings and short: what ``phase_rim`` and ``faint_texture``
+    judge (a grain's rim, a bit of texture), unless their other measures say otherwise."""
+    return (e.side_depth < config.REJECT_SIDE_DEPTH) \
+        & (e.slenderness < config.REJECT_RIM_MAX_SLENDERNESS)
+
+
 def _rough_band(e):
     """A band wide enough to show its interior, rough inside (``interior_rough`` at least
     ``REJECT_BAND_MAX_ROUGH``): layered traces merged into one band, or a crack with debris;
@@ -126,9 +133,8 @@ def kept_lone_lines(evidence, rejected_as):
 
 #: the rules in the order they are tried: name, test on the evidence table
 RULES = (
-    ("phase_rim", lambda e: (e.side_depth < config.REJECT_SIDE_DEPTH)
-     & (e.slenderness < config.REJECT_RIM_MAX_SLENDERNESS)
-     & (e.width_px >= config.REJECT_RIM_MIN_WIDTH_PX) & ~_rough_band(e) & ~_clear_in_grain(e)),
+    ("phase_rim", lambda e: _shallow_short(e) & (e.width_px >= config.REJECT_RIM_MIN_WIDTH_PX)
+     & ~_rough_band(e) & ~_clear_in_grain(e)),
     ("phase_edge", lambda e: (e.side_depth < config.REJECT_EDGE_DEPTH)
      & (e.side_step >= config.REJECT_EDGE_STEP)
      & (e.slenderness < config.REJECT_EDGE_MAX_SLENDERNESS)),
@@ -152,9 +158,8 @@ RULES = (
     ("noise", lambda e: (e.depth_snr < config.REJECT_NOISE_SNR)
      & ~((e.side_step >= config.REJECT_EDGE_STEP)
          & (e.slenderness >= config.REJECT_RIM_MAX_SLENDERNESS))),
-    ("faint_texture", lambda e: (e.side_depth < config.REJECT_SIDE_DEPTH)
-     & (e.slenderness < config.REJECT_RIM_MAX_SLENDERNESS)
-     & (e.side_step >= config.REJECT_TEXTURE_STEP) & (e.side_step < config.REJECT_EDGE_STEP)),
+    ("faint_texture", lambda e: _shallow_short(e) & (e.side_step >= config.REJECT_TEXTURE_STEP)
+     & (e.side_step < config.REJECT_EDGE_STEP)),
 )
 #: the size (px) from which a rule judges an object: REJECT_MIN_AREA_PX, except where the
 #: rule's evidence holds on smaller objects
