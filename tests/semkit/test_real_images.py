@@ -61,7 +61,7 @@ def test_microct_surround_is_never_a_crack(microct):
     # at most three slices are flagged, each for a reason the slice shows: noise (slice 176
     # while its void was read on the fracture's plateaus: contrast 10.4 noise sigmas), faint
     # lines (slices 0 and 5: a fifth or more of their length in the dark rims of bright
-    # inclusions, F1 0.77 and 0.78, length 1.24x and 1.32x the truth) or a darkest "mineral"
+    # inclusions, F1 0.78 and 0.78, length 1.27x and 1.32x the truth) or a darkest "mineral"
     # lying largely in long narrow objects (slice 504's wide fracture)
     flagged = microct[~microct.valid]
     assert len(flagged) <= 3, flagged.image.tolist()

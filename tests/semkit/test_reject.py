@@ -121,8 +121,8 @@ def test_faint_texture_removes_boundary_bits_on_a_noisy_image(monkeypatch):
         a = analyse_image(s.image, pixel_size_um=1.0, stage="failure", classify=False)
         row = a.summary()
         out[rule] = (centreline_scores(a.crack_labels > 0, s.crack_mask > 0),
-                          row["crack_length_um"] / truth_length - 1,
-                          int((a.rejected_as == "faint_texture").sum()))
+                     row["crack_length_um"] / truth_length - 1,
+                     int((a.rejected_as == "faint_texture").sum()))
     (on, len_on, n_on), (off, len_off, n_off) = out[True], out[False]
     assert n_on >= 3 and n_off == 0
     assert on["precision"] >= off["precision"] + 0.03
