@@ -14,13 +14,20 @@ against the crack paths (``length_px``: a layered or stepped shear crack counted
 ``semkit.synth``'s path counts it). A *confidently wrong* image is one marked valid whose
 area or length (against the traces) is off by more than 25 %.
 
-Writes ``benchmarks/semkit_results/dev_family.json`` and prints a markdown table.
+With ``--scene`` each image also carries scene elements the plain family lacks, drawn from
+the same seed: in half the images thin satellite traces 1-4 px beside the crack walls (a
+second microcrack of a crack array, or a third layer), in 40 % of them 4-20 lens-shaped grains
+as dark as the cracks (organic matter, void-filled lenses), which are not cracks.
 
-Run: ``python benchmarks/semkit_dev_family.py [--n 24] [--jobs 2]``
+Writes ``benchmarks/semkit_results/dev_family.json`` (``dev_family_scene.json`` with
+``--scene``) and prints a markdown table.
+
+Run: ``python benchmarks/semkit_dev_family.py [--n 24] [--jobs 2] [--scene]``
 """
 from __future__ import annotations
 
 import argparse
+import functools
 import json
 import os
 import pathlib
@@ -33,8 +40,10 @@ from heldout_semkit import WRONG, confidently_wrong  # one rule for both familie
 OUT = pathlib.Path(__file__).resolve().parent / "semkit_results"
 
 
-def appearance(seed):
-    """The randomised ``make_sem_image`` keywords of development image ``seed``."""
+def appearance(seed, scene=False):
+    """The randomised ``make_sem_image`` keywords of development image ``seed``; with
+    ``scene`` also its scene elements (satellite traces beside cracks in half the images,
+    4-20 crack-dark lenses in 40 %), drawn after the rest so the other keys do not change."""
     r = np.random.default_rng(10_000 + seed)
     nm = int(r.integers(2, 5))
     minerals = [(f"m{i}", float(g), float(r.uniform(0.1, 0.5)))
@@ -42,18 +51,23 @@ def appearance(seed):
     if r.random() < 0.6:
         minerals.append(("dark", float(r.uniform(45, 75)), float(r.uniform(0.05, 0.15))))
     widths = (float(r.uniform(1, 2.5)), float(r.uniform(4, 10)))
-    return dict(minerals=minerals, gradient=float(r.choice([1.0, r.uniform(1.2, 2.5)])),
-                n_pores=int(r.integers(0, 25)), noise_sigma=float(r.uniform(2, 12)),
-                blur_sigma=float(r.uniform(0.4, 1.4)),
-                boundary_depth=float(r.uniform(0.05, 0.35)), bit_depth=int(r.choice([8, 16])),
-                widths=widths, mean_grain_px=float(r.uniform(50, 160)))
+    a = dict(minerals=minerals, gradient=float(r.choice([1.0, r.uniform(1.2, 2.5)])),
+             n_pores=int(r.integers(0, 25)), noise_sigma=float(r.uniform(2, 12)),
+             blur_sigma=float(r.uniform(0.4, 1.4)),
+             boundary_depth=float(r.uniform(0.05, 0.35)), bit_depth=int(r.choice([8, 16])),
+             widths=widths, mean_grain_px=float(r.uniform(50, 160)))
+    if scene:  # drawn after the rest: the keys above stay as they were
+        a.update(satellite=float(r.uniform(0.2, 0.6)) if r.random() < 0.5 else 0.0,
+                 n_lenses=int(r.integers(4, 21)) if r.random() < 0.4 else 0)
+    return a
 
 
-def score_image(seed, shape=(768, 1024)):
-    """Analyse development image ``seed``; its truth, semkit's numbers and the errors."""
+def score_image(seed, shape=(768, 1024), scene=False):
+    """Analyse development image ``seed`` (with its scene elements when ``scene``); its
+    truth, semkit's numbers and the errors."""
     from semkit.analysis import analyse_image
     from semkit.synth import make_sem_image
-    s = make_sem_image(shape, stage="post", seed=seed, **appearance(seed))
+    s = make_sem_image(shape, stage="post", seed=seed, **appearance(seed, scene=scene))
     row = analyse_image(s.image, pixel_size_um=s.pixel_size_um, name=f"dev_{seed}",
                         stage="failure", classify=False).summary()
     area = row["crack_area_um2"] / s.pixel_size_um ** 2
@@ -107,13 +121,18 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--n", type=int, default=24, help="images (seeds 1..N)")
     ap.add_argument("--jobs", type=int, default=2)
+    ap.add_argument("--scene", action="store_true",
+                    help="add the scene elements (satellite traces, crack-dark lenses); "
+                         "writes dev_family_scene.json")
     args = ap.parse_args(argv)
     with ProcessPoolExecutor(args.jobs) as ex:
-        rows = list(ex.map(score_image, range(1, args.n + 1)))
+        rows = list(ex.map(functools.partial(score_image, scene=args.scene),
+                           range(1, args.n + 1)))
     s = summarise(rows, ("area", "length", "path_length"))
     OUT.mkdir(parents=True, exist_ok=True)
     meta = dict(machine=platform.machine(), cpus=os.cpu_count(), load=os.getloadavg())
-    (OUT / "dev_family.json").write_text(json.dumps(dict(meta=meta, summary=s, per_image=rows),
+    name = "dev_family_scene.json" if args.scene else "dev_family.json"
+    (OUT / name).write_text(json.dumps(dict(meta=meta, summary=s, per_image=rows),
                                                     indent=1, default=float))
     print_table(s, rows, (("area", "area"), ("length (drawn traces)", "length"),
                           ("length (crack paths)", "path_length")))

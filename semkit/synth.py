@@ -72,8 +72,9 @@ class SynthImage:
     seed : int or None
     illumination : (H, W) ndarray of float32
         Multiplicative illumination field (1 = full brightness).
-    speckle_mask, pore_mask, boundary_mask : (H, W) ndarray of bool
-        Where the isolated speckles, the pores and the (faint) grain boundaries are.
+    speckle_mask, pore_mask, boundary_mask, lens_mask : (H, W) ndarray of bool
+        Where the isolated speckles, the pores, the (faint) grain boundaries and the dark
+        lenses are.
     traces : list of list of (K, 3) ndarray
         Per crack, the polylines drawn (columns x, y, width; px).
     """
@@ -94,6 +95,7 @@ class SynthImage:
     pore_mask: np.ndarray
     boundary_mask: np.ndarray
     traces: list
+    lens_mask: np.ndarray = None
 
     @property
     def crack_area_px(self) -> int:
@@ -261,6 +263,58 @@ def _shear_traces(pts, rng):
     return traces, debris
 
 
+def _satellite(path, traces, rng):
+    """A thin trace parallel to ``path`` 1-4 px beyond the outer wall of the traces drawn
+    along it (a tensile opening, steps or layers), over 40-80 % of its length; None where
+    the path is too short."""
+    pts = _resample(path)
+    if len(pts) < 12:
+        return None
+    tree = cKDTree(_resample(path, 0.5))
+    half = 0.0
+    for t in traces:
+        d = tree.query(t[:, :2])[0]
+        if np.median(d) < 6.0:  # drawn along this path (not a branch or another path)
+            half = max(half, float(np.max(d + t[:, 2] / 2)))
+    nrm = _normals(pts)
+    n = len(pts)
+    run = int(n * rng.uniform(0.4, 0.8))
+    a = int(rng.integers(0, n - run + 1))
+    wv = rng.uniform(0.9, 1.6)
+    off = rng.choice([-1.0, 1.0]) * (half + rng.uniform(1.0, 4.0) + wv / 2)
+    piece = pts[a:a + run] + off * nrm[a:a + run]
+    return np.column_stack([piece, np.full(len(piece), wv)])
+
+
+def _lenses(n, crack_labels, margin, rng):
+    """``n`` dark lens-shaped grains kept 4 px clear of the cracks -> (mask, coverage)."""
+    h, w = crack_labels.shape
+    mask = np.zeros((h, w), bool)
+    cov = np.zeros((h, w), np.float32)
+    placed = 0
+    for _ in range(4 * n):
+        if placed >= n:
+            break
+        c = np.array([rng.uniform(margin, w - margin), rng.uniform(margin, h - margin)])
+        length = rng.uniform(8.0, 40.0)
+        width = max(length / rng.uniform(2.0, 6.0), 2.0)
+        ang = rng.uniform(0, math.pi)
+        u = np.array([math.cos(ang), math.sin(ang)])
+        s = np.linspace(-0.5, 0.5, max(int(length / 2), 3))
+        pts = c + np.outer(s * length, u)
+        # a lens: widest at the middle, pointed at both ends
+        wv = np.maximum(width * np.sqrt(np.clip(1.0 - (2.0 * s) ** 2, 0.0, 1.0)), 0.6)
+        ex, (y0, x0) = _render_traces([np.column_stack([pts, wv])], (h, w))
+        win = (slice(y0, y0 + ex.shape[0]), slice(x0, x0 + ex.shape[1]))
+        near = ndi.binary_dilation(crack_labels[win] > 0, iterations=4)
+        if (near & (ex <= 2)).any():
+            continue
+        mask[win] |= ex <= 0
+        np.maximum(cov[win], np.clip(0.5 - ex, 0.0, 1.0), out=cov[win])
+        placed += 1
+    return mask, cov
+
+
 def _render_traces(traces, shape):
     """Excess field of a set of traces over their joint bounding box -> (excess, (y0, x0))."""
     h, w = shape
@@ -282,7 +336,8 @@ def make_sem_image(shape=(768, 1024), *, stage="pre", n_cracks=None, widths=(1.0
                    mean_grain_px=None, minerals=MINERALS, gradient=1.0, n_speckles=None,
                    n_pores=0, noise_sigma=5.0, blur_sigma=0.6, boundary_depth=0.12,
                    pixel_size_um=1.43, bit_depth=8, type_mix=None, max_overlap=0.05,
-                   crack_grey=CRACK_GREY, seed=None) -> SynthImage:
+                   crack_grey=CRACK_GREY, satellite=0.0, n_lenses=0,
+                   seed=None) -> SynthImage:
     """Make a synthetic BSE-like SEM image of cracked rock with exact ground truth.
 
     Parameters
@@ -326,6 +381,17 @@ def make_sem_image(shape=(768, 1024), *, stage="pre", n_cracks=None, widths=(1.0
     max_overlap : float
         A new crack is redrawn when more than this share of its pixels already belong to
         other cracks (crossings are allowed; running along another crack is not).
+    satellite : float
+        ``stage="post"`` only: the chance that a crack path (of 24 px or more) carries a
+        satellite, a thin (0.9-1.6 px) parallel trace 1-4 px from the crack's wall over
+        40-80 % of the path (a second microcrack of a crack array, or a layer of a layered
+        shear crack). The
+        satellite belongs to its crack: it counts in ``area_cov_px``, ``trace_length_px``
+        and ``n_traces``.
+    n_lenses : int
+        Dark lens-shaped grains (organic matter or void-filled lenses, 8-40 px long, aspect
+        2-6) as dark as the cracks (crack grey + 0-20); they are not cracks
+        (``lens_mask``).
     seed : int, optional
         Same seed -> identical output.
 
@@ -347,6 +413,9 @@ def make_sem_image(shape=(768, 1024), *, stage="pre", n_cracks=None, widths=(1.0
     if h < 32 or w < 32:
         raise ValueError(f"shape: expected at least 32 x 32, got {shape}")
     rng = np.random.default_rng(seed)
+    # the optional scene elements draw from their own stream: without them an image is
+    # bit-identical to one made before they existed
+    extra = np.random.default_rng(None if seed is None else [int(seed), 7])
     mean_grain_px = float(mean_grain_px or min(h, w) / 8.0)
     n_cracks = int(n_cracks if n_cracks is not None else max(h * w // 25000, 3))
     n_speckles = int(n_speckles if n_speckles is not None else h * w // 10000)
@@ -461,6 +530,9 @@ def make_sem_image(shape=(768, 1024), *, stage="pre", n_cracks=None, widths=(1.0
                         t, d = _shear_traces(seg, rng)
                         traces += t
                         debris += d
+        if stage == "post" and satellite > 0:
+            traces += [t for m in mains if extra.random() < satellite
+                       for t in [_satellite(m, traces, extra)] if t is not None]
         if not traces:
             continue
         ex, (y0, x0) = _render_traces(traces + debris, (h, w))
@@ -517,6 +589,7 @@ def make_sem_image(shape=(768, 1024), *, stage="pre", n_cracks=None, widths=(1.0
 
     speckle_mask, speck_cov = blobs(n_speckles, 1.0, 3.0)
     pore_mask, pore_cov = blobs(n_pores, 6.0, 18.0)
+    lens_mask, lens_cov = _lenses(n_lenses, crack_labels, margin, extra)
 
     # grey levels
     grain_offset = 1.0 + 0.03 * rng.standard_normal(n_grains + 1)
@@ -530,6 +603,8 @@ def make_sem_image(shape=(768, 1024), *, stage="pre", n_cracks=None, widths=(1.0
     grey = grey * (1 - cover) + crack_grey * cover
     grey = grey * (1 - pore_cov) + (crack_grey - 5.0) * pore_cov
     grey = grey * (1 - speck_cov) + (crack_grey + 10.0) * speck_cov
+    if n_lenses:
+        grey = grey * (1 - lens_cov) + (crack_grey + extra.uniform(0.0, 20.0)) * lens_cov
     if blur_sigma > 0:
         grey = ndi.gaussian_filter(grey, blur_sigma)
     illum = np.ones((h, w), np.float32)
@@ -555,7 +630,7 @@ def make_sem_image(shape=(768, 1024), *, stage="pre", n_cracks=None, widths=(1.0
                       pixel_size_um=float(pixel_size_um), cracks=cracks, grains=grains,
                       mineral_names=names, stage=stage, seed=seed, illumination=illum,
                       speckle_mask=speckle_mask, pore_mask=pore_mask, boundary_mask=boundary,
-                      traces=all_traces)
+                      traces=all_traces, lens_mask=lens_mask)
 
 
 # --------------------------------------------------------------------------- sample set

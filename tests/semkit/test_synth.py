@@ -111,3 +111,46 @@ def test_crack_grey_sets_the_void_grey_and_nothing_else():
     rock = cv2.dilate(core.astype(np.uint8), np.ones((9, 9), np.uint8)) == 0
     diff = np.abs(a.image[rock].astype(float) - b.image[rock].astype(float))
     assert np.percentile(diff, 99) <= 1
+
+
+def test_scene_elements_leave_the_rest_of_the_image_as_it_was():
+    """Satellites and lenses draw from their own stream: without them the image is the one
+    made before they existed; with them the grains are unchanged."""
+    kw = dict(stage="post", n_cracks=8, widths=(2.0, 5.0), seed=4)
+    a = make_sem_image((256, 320), **kw)
+    b = make_sem_image((256, 320), satellite=0.0, n_lenses=0, **kw)
+    assert np.array_equal(a.image, b.image) and a.cracks.equals(b.cracks)
+    assert not a.lens_mask.any()
+    c = make_sem_image((256, 320), satellite=1.0, n_lenses=6, **kw)
+    assert np.array_equal(a.grain_labels, c.grain_labels)
+    assert c.lens_mask.any() and not (c.lens_mask & c.crack_mask).any()
+
+
+def test_satellites_are_thin_parallel_traces_that_belong_to_their_crack():
+    kw = dict(stage="post", n_cracks=6, widths=(3.0, 6.0), type_mix=(("tensile", 1.0),),
+              seed=9)
+    a = make_sem_image((256, 320), **kw)
+    c = make_sem_image((256, 320), satellite=1.0, **kw)
+    ta, tc = a.cracks, c.cracks
+    assert np.array_equal(ta["length_px"], tc["length_px"])  # the same paths (this seed)
+    more = tc["n_traces"] > ta["n_traces"]
+    assert more.sum() == 3 and (more == (ta["length_px"] >= 24)).all()  # every path >= 24 px
+    extra_len = (tc["trace_length_px"] - ta["trace_length_px"])[more] / ta["length_px"][more]
+    assert ((extra_len > 0.35) & (extra_len < 0.85)).all()  # 40-80 % of the path
+    extra_area = (tc["area_cov_px"] - ta["area_cov_px"])[more]
+    assert (extra_area > 0.7 * (tc["trace_length_px"] - ta["trace_length_px"])[more]).all()
+    # apart from the crack: the satellite pixels are not the crack's wall pixels
+    sat = c.crack_mask & ~a.crack_mask
+    from scipy import ndimage as ndi
+    d = ndi.distance_transform_edt(~a.crack_mask)[sat]
+    assert np.median(d) >= 1.5 and d.max() <= 6.5
+
+
+def test_lenses_are_crack_dark_and_no_cracks():
+    s = make_sem_image((256, 320), stage="post", n_cracks=4, n_lenses=8, seed=2)
+    lab, n = __import__("scipy").ndimage.label(s.lens_mask)
+    assert 5 <= n <= 8
+    assert not (s.lens_mask & s.crack_mask).any()
+    img = s.image.astype(float)
+    crack_core = s.image[s.crack_mask].astype(float)
+    assert np.median(img[s.lens_mask]) < np.percentile(crack_core, 75) + 25
