@@ -286,8 +286,21 @@ def _satellite(path, traces, rng):
     return np.column_stack([piece, np.full(len(piece), wv)])
 
 
-def _lenses(n, crack_labels, margin, rng):
-    """``n`` dark lens-shaped grains kept 4 px clear of the cracks -> (mask, coverage)."""
+def _lens(c, rng):
+    """A lens-shaped grain at ``c`` (8-40 px long, aspect 2-6, pointed at both ends) as a
+    (K, 3) polyline of widths."""
+    length = rng.uniform(8.0, 40.0)
+    width = max(length / rng.uniform(2.0, 6.0), 2.0)
+    ang = rng.uniform(0, math.pi)
+    u = np.array([math.cos(ang), math.sin(ang)])
+    s = np.linspace(-0.5, 0.5, max(int(length / 2), 3))
+    wv = np.maximum(width * np.sqrt(np.clip(1.0 - (2.0 * s) ** 2, 0.0, 1.0)), 0.6)
+    return np.column_stack([c + np.outer(s * length, u), wv])
+
+
+def _place_isolated(n, crack_labels, margin, rng, shape):
+    """``n`` dark objects, each the polyline ``shape(centre)`` at a random centre, kept 4 px
+    clear of the cracks (a centre is redrawn up to 4 n times) -> (mask, coverage)."""
     h, w = crack_labels.shape
     mask = np.zeros((h, w), bool)
     cov = np.zeros((h, w), np.float32)
@@ -296,15 +309,7 @@ def _lenses(n, crack_labels, margin, rng):
         if placed >= n:
             break
         c = np.array([rng.uniform(margin, w - margin), rng.uniform(margin, h - margin)])
-        length = rng.uniform(8.0, 40.0)
-        width = max(length / rng.uniform(2.0, 6.0), 2.0)
-        ang = rng.uniform(0, math.pi)
-        u = np.array([math.cos(ang), math.sin(ang)])
-        s = np.linspace(-0.5, 0.5, max(int(length / 2), 3))
-        pts = c + np.outer(s * length, u)
-        # a lens: widest at the middle, pointed at both ends
-        wv = np.maximum(width * np.sqrt(np.clip(1.0 - (2.0 * s) ** 2, 0.0, 1.0)), 0.6)
-        ex, (y0, x0) = _render_traces([np.column_stack([pts, wv])], (h, w))
+        ex, (y0, x0) = _render_traces([shape(c)], (h, w))
         win = (slice(y0, y0 + ex.shape[0]), slice(x0, x0 + ex.shape[1]))
         near = ndi.binary_dilation(crack_labels[win] > 0, iterations=4)
         if (near & (ex <= 2)).any():
@@ -569,27 +574,13 @@ def make_sem_image(shape=(768, 1024), *, stage="pre", n_cracks=None, widths=(1.0
 
     # speckles and pores (dark, not cracks)
     def blobs(n, rmin, rmax):
-        mask = np.zeros((h, w), bool)
-        cov = np.zeros((h, w), np.float32)
-        placed = 0
-        for _ in range(4 * n):
-            if placed >= n:
-                break
-            c = np.array([rng.uniform(margin, w - margin), rng.uniform(margin, h - margin)])
-            d = rng.uniform(rmin, rmax)
-            ex, (y0, x0) = _render_traces([np.array([[c[0], c[1], d]])], (h, w))
-            win = (slice(y0, y0 + ex.shape[0]), slice(x0, x0 + ex.shape[1]))
-            near = ndi.binary_dilation(crack_labels[win] > 0, iterations=4)
-            if (near & (ex <= 2)).any():
-                continue  # keep specks and pores isolated from cracks
-            mask[win] |= ex <= 0
-            np.maximum(cov[win], np.clip(0.5 - ex, 0.0, 1.0), out=cov[win])
-            placed += 1
-        return mask, cov
+        return _place_isolated(n, crack_labels, margin, rng,
+                               lambda c: np.array([[c[0], c[1], rng.uniform(rmin, rmax)]]))
 
     speckle_mask, speck_cov = blobs(n_speckles, 1.0, 3.0)
     pore_mask, pore_cov = blobs(n_pores, 6.0, 18.0)
-    lens_mask, lens_cov = _lenses(n_lenses, crack_labels, margin, extra)
+    lens_mask, lens_cov = _place_isolated(n_lenses, crack_labels, margin, extra,
+                                          lambda c: _lens(c, extra))
 
     # grey levels
     grain_offset = 1.0 + 0.03 * rng.standard_normal(n_grains + 1)
