@@ -132,8 +132,8 @@ def main(argv=None):
     OUT.mkdir(parents=True, exist_ok=True)
     meta = dict(machine=platform.machine(), cpus=os.cpu_count(), load=os.getloadavg())
     name = "dev_family_scene.json" if args.scene else "dev_family.json"
-    (OUT / name).write_text(json.dumps(dict(meta=meta, summary=s, per_image=rows),
-                                                    indent=1, default=float))
+    (OUT / name).write_text(json.dumps(dict(meta=meta, summary=s, per_image=rows), indent=1,
+                                       default=float))
     print_table(s, rows, (("area", "area"), ("length (drawn traces)", "length"),
                           ("length (crack paths)", "path_length")))
     return 0

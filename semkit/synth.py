@@ -95,7 +95,7 @@ class SynthImage:
     pore_mask: np.ndarray
     boundary_mask: np.ndarray
     traces: list
-    lens_mask: np.ndarray = None
+    lens_mask: np.ndarray
 
     @property
     def crack_area_px(self) -> int:
@@ -536,8 +536,8 @@ def make_sem_image(shape=(768, 1024), *, stage="pre", n_cracks=None, widths=(1.0
                         traces += t
                         debris += d
         if stage == "post" and satellite > 0:
-            traces += [t for m in mains if extra.random() < satellite
-                       for t in [_satellite(m, traces, extra)] if t is not None]
+            sats = [_satellite(m, traces, extra) for m in mains if extra.random() < satellite]
+            traces += [t for t in sats if t is not None]
         if not traces:
             continue
         ex, (y0, x0) = _render_traces(traces + debris, (h, w))

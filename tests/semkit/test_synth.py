@@ -114,16 +114,21 @@ def test_crack_grey_sets_the_void_grey_and_nothing_else():
 
 
 def test_scene_elements_leave_the_rest_of_the_image_as_it_was():
-    """Satellites and lenses draw from their own stream: without them the image is the one
-    made before they existed; with them the grains are unchanged."""
+    """Lenses draw from their own stream: the cracks and every pixel more than 4 px from a
+    lens are those of the image made without them (a draw from the main stream would move
+    the noise everywhere); the defaults are no satellites and no lenses."""
+    import cv2
     kw = dict(stage="post", n_cracks=8, widths=(2.0, 5.0), seed=4)
     a = make_sem_image((256, 320), **kw)
     b = make_sem_image((256, 320), satellite=0.0, n_lenses=0, **kw)
     assert np.array_equal(a.image, b.image) and a.cracks.equals(b.cracks)
     assert not a.lens_mask.any()
-    c = make_sem_image((256, 320), satellite=1.0, n_lenses=6, **kw)
-    assert np.array_equal(a.grain_labels, c.grain_labels)
+    c = make_sem_image((256, 320), n_lenses=6, **kw)
     assert c.lens_mask.any() and not (c.lens_mask & c.crack_mask).any()
+    assert np.array_equal(a.crack_labels, c.crack_labels) and a.cracks.equals(c.cracks)
+    far = cv2.dilate(c.lens_mask.astype(np.uint8), np.ones((9, 9), np.uint8)) == 0
+    assert np.array_equal(a.image[far], c.image[far])
+    assert (a.image[~far] != c.image[~far]).mean() > 0.2  # the lenses are drawn
 
 
 def test_satellites_are_thin_parallel_traces_that_belong_to_their_crack():
@@ -147,10 +152,18 @@ def test_satellites_are_thin_parallel_traces_that_belong_to_their_crack():
 
 
 def test_lenses_are_crack_dark_and_no_cracks():
+    """Lenses take the crack grey + 0-20 (cores of the cracks: 32, lenses 41 median here),
+    far below the rock (151), and are not part of the crack truth."""
+    import cv2
+    from scipy import ndimage as ndi
     s = make_sem_image((256, 320), stage="post", n_cracks=4, n_lenses=8, seed=2)
-    lab, n = __import__("scipy").ndimage.label(s.lens_mask)
+    _, n = ndi.label(s.lens_mask)
     assert 5 <= n <= 8
     assert not (s.lens_mask & s.crack_mask).any()
-    img = s.image.astype(float)
-    crack_core = s.image[s.crack_mask].astype(float)
-    assert np.median(img[s.lens_mask]) < np.percentile(crack_core, 75) + 25
+    m = s.crack_mask.astype(np.uint8)
+    core = cv2.distanceTransform(m, cv2.DIST_L2, 3) >= 1.5
+    dark = s.crack_mask | s.lens_mask | s.pore_mask | s.speckle_mask
+    rock = cv2.dilate(dark.astype(np.uint8), np.ones((9, 9), np.uint8)) == 0
+    lens, crack = np.median(s.image[s.lens_mask]), np.median(s.image[core])
+    assert crack - 5 <= lens <= crack + 25
+    assert lens < np.percentile(s.image[rock], 1) - 30
