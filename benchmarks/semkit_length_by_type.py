@@ -21,21 +21,17 @@ Run: ``python benchmarks/semkit_length_by_type.py [--jobs 2]``
 """
 from __future__ import annotations
 
-import argparse
 import json
 import pathlib
 import platform
 import sys
-from concurrent.futures import ProcessPoolExecutor
 
 import numpy as np
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
-from semkit_dev_family import appearance  # noqa: E402
+from semkit_dev_family import OUT, appearance  # noqa: E402
+from thin_trace_contrast import SEEDS, SHAPE, map_seeds  # noqa: E402  (the family's images)
 
-OUT = pathlib.Path(__file__).resolve().parent / "semkit_results"
-SHAPE = (768, 1024)
-SEEDS = range(1, 25)  #: the development family's default set
 NEAR_PX = 4.0
 TYPES = ("tensile", "mixed", "shear")
 WIDTHS = (0.0, 1.2, 1.5, 2.0, 3.0, np.inf)  #: trace width classes, px
@@ -121,11 +117,7 @@ def summarise(per):
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--jobs", type=int, default=2)
-    args = ap.parse_args(argv)
-    with ProcessPoolExecutor(args.jobs) as ex:
-        per = list(ex.map(measure_image, SEEDS))
+    per = map_seeds(measure_image, argv, __doc__)
     s = summarise(per)
     OUT.mkdir(exist_ok=True)
     (OUT / "length_by_type.json").write_text(json.dumps(dict(

@@ -91,12 +91,18 @@ def summarise(points):
     return out
 
 
-def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+def map_seeds(measure, argv=None, doc=__doc__):
+    """``measure(seed)`` for every development image, on ``--jobs`` processes (the command
+    line ``argv`` of a benchmark whose docstring is ``doc``)."""
+    ap = argparse.ArgumentParser(description=doc.splitlines()[0])
     ap.add_argument("--jobs", type=int, default=2)
     args = ap.parse_args(argv)
     with ProcessPoolExecutor(args.jobs) as ex:
-        per = list(ex.map(measure_image, SEEDS))
+        return list(ex.map(measure, SEEDS))
+
+
+def main(argv=None):
+    per = map_seeds(measure_image, argv)
     points = {k: np.concatenate([p[k] for p in per]) for k in CLASSES}
     s = summarise(points)
     OUT.mkdir(exist_ok=True)
