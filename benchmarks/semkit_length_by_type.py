@@ -11,9 +11,10 @@ pixel of the default analysis's accepted cracks is given to the nearest drawn cr
 * ``counted_over_traces`` — after it, each piece times its object's ``n_traces`` (the mean
   over the object's centreline: a network's layered branch shares its count with the rest).
 
-And per width class of the traces of cracks drawn with two or more traces (layers and steps),
-the share of their length more than 1 px from every detected object (accepted or rejected):
-what no trace count can recover, since nothing was outlined there.
+And per width class of the traces of the shear cracks (each a layer or a step; a mixed crack's
+shear segments are left out, as its tensile segments are traces too), the share of their length
+more than 1 px from every detected object (accepted or rejected): what no trace count can
+recover, since nothing was outlined there.
 
 Writes ``benchmarks/semkit_results/length_by_type.json`` and prints two markdown tables.
 
@@ -34,11 +35,11 @@ from thin_trace_contrast import SEEDS, SHAPE, map_seeds  # noqa: E402  (the fami
 
 NEAR_PX = 4.0
 TYPES = ("tensile", "mixed", "shear")
-WIDTHS = (0.0, 1.2, 1.5, 2.0, 3.0, np.inf)  #: trace width classes, px
+WIDTHS = (0.0, 1.2, 1.5, 2.0, np.inf)  #: trace width classes, px (the last open)
 
 
 def measure_image(seed):
-    """Centreline length per type and layer-trace length outside the objects per width class
+    """Centreline length per type and shear-trace length outside the objects per width class
     for development image ``seed`` (a dict of sums)."""
     import cv2
 
@@ -81,11 +82,9 @@ def measure_image(seed):
     h, w = lab.shape
     missed = np.zeros(len(WIDTHS) - 1)
     total = np.zeros(len(WIDTHS) - 1)
-    for traces in s.traces:
-        if sum(len(t) >= 2 for t in traces) < 2:
-            continue
-        for t in traces:
-            if len(t) < 2:
+    for cid in c.crack_id[c.type_post == "shear"]:  # every trace a layer or a step
+        for t in s.traces[cid - 1]:
+            if len(t) < 2:  # debris
                 continue
             seg = np.hypot(*np.diff(t[:, :2], axis=0).T)
             mid = 0.5 * (t[1:, :2] + t[:-1, :2])
@@ -94,7 +93,7 @@ def measure_image(seed):
             k = np.searchsorted(WIDTHS, np.median(t[:, 2]), side="right") - 1
             total[k] += seg.sum()
             missed[k] += seg[~objects[r, q]].sum()
-    out["layer_traces"] = dict(total=total.tolist(), missed=missed.tolist())
+    out["shear_traces"] = dict(total=total.tolist(), missed=missed.tolist())
     return out
 
 
@@ -108,9 +107,10 @@ def summarise(per):
                     centreline_over_path=cl / pa if pa else None,
                     centreline_over_traces=cl / tr if tr else None,
                     counted_over_traces=co / tr if tr else None)
-    tot = np.sum([p["layer_traces"]["total"] for p in per], axis=0)
-    mis = np.sum([p["layer_traces"]["missed"] for p in per], axis=0)
-    s["layer_traces"] = [dict(width_px=[WIDTHS[i], WIDTHS[i + 1]], length_px=float(tot[i]),
+    tot = np.sum([p["shear_traces"]["total"] for p in per], axis=0)
+    mis = np.sum([p["shear_traces"]["missed"] for p in per], axis=0)
+    s["shear_traces"] = [dict(width_px=[WIDTHS[i], WIDTHS[i + 1] if i + 2 < len(WIDTHS)
+                                        else None], length_px=float(tot[i]),
                               missed_share=float(mis[i] / tot[i]) if tot[i] else None)
                          for i in range(len(tot))]
     return s
@@ -122,8 +122,7 @@ def main(argv=None):
     OUT.mkdir(exist_ok=True)
     (OUT / "length_by_type.json").write_text(json.dumps(dict(
         meta=dict(seeds=list(SEEDS), shape=list(SHAPE), near_px=NEAR_PX,
-                  python=platform.python_version()), summary=s), indent=1,
-        default=lambda v: None if v == np.inf else float(v)))
+                  python=platform.python_version()), summary=s), indent=1, allow_nan=False))
     print("| type | path px | traces px | centreline / path | centreline / traces | "
           "counted / traces |")
     print("|---|---|---|---|---|---|")
@@ -133,12 +132,12 @@ def main(argv=None):
               f"{r['centreline_over_path']:.3f} | {r['centreline_over_traces']:.3f} | "
               f"{r['counted_over_traces']:.3f} |")
     print(f"\ncentreline on no drawn crack: {s['false_centreline_px']:.0f} px\n")
-    print("| layer-trace width, px | length px | share outside every object |")
+    print("| shear-trace width, px | length px | share outside every object |")
     print("|---|---|---|")
-    for r in s["layer_traces"]:
+    for r in s["shear_traces"]:
         lo, hi = r["width_px"]
         share = "—" if r["missed_share"] is None else f"{r['missed_share']:.1%}"
-        print(f"| {lo:g}–{hi:g} | {r['length_px']:.0f} | {share} |")
+        print(f"| {lo:g}–{'' if hi is None else f'{hi:g}'} | {r['length_px']:.0f} | {share} |")
 
 
 if __name__ == "__main__":
