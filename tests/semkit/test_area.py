@@ -82,15 +82,18 @@ def test_bad_area_option_is_one_clear_error():
         AnalysisOptions(area="pv")
 
 
-@pytest.mark.xfail(strict=True, reason="known limit (docs/semkit.md, Known limits): a layered "
-                   "crack alone in an image gives its void grey from its own merged band")
+@pytest.mark.xfail(strict=True, raises=AssertionError,
+                   reason="known limit (docs/semkit.md, Known limits): a layered crack alone "
+                   "in an image gives its void grey from its own merged band")
 @pytest.mark.parametrize("spacing,blur", [(2.5, 0.7), (3.0, 1.0)])
 def test_a_layered_crack_alone_is_not_its_own_void(spacing, blur):
     """One layered crack, two 1.2-px traces (grey 30 in 180) 2.5-3 px apart, and nothing else
     dark: the 0.7-px denoising merges the traces into a flat band at grey 123-132, which
     passes for the void's plateau, and every area scales with the contrast to it (2.2x and
-    2.5x the traces' area, the image valid). Strict: when this passes, the limit is gone."""
+    2.5x the traces' area, the image valid). Strict: when the area is right or the image is
+    flagged (no longer confidently wrong), this passes and the limit is gone."""
     from test_parallel_traces import _pair, _render
     img, _ = _render(_pair(spacing, 0.0), blur=blur)
     a = analyse_image(img, pixel_size_um=1.0, classify=False, flatten="none")
-    assert float(a.cracks.area_px.sum()) / (2 * 1.2 * 160.0) <= 1.25
+    ratio = float(a.cracks.area_px.sum()) / (2 * 1.2 * 160.0)
+    assert ratio <= 1.25 or not a.summary()["valid"], ratio
