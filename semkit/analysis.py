@@ -384,7 +384,7 @@ class CrackAnalysis:
             # wide cracks; the midpoint count on the others
             area, pv = mixed_area(self.smooth, self.labels, self.n_objects,
                                   skeleton=self.skeleton, background=th.background,
-                                  crack_level=th.void_level, area_mask=self.area_mask)
+                                  crack_level=self.void_level[0], area_mask=self.area_mask)
             ids = t["crack_id"].to_numpy()
             t["area_px"] = area[ids]
             t["area_um2"] = area[ids] * px * px
@@ -399,7 +399,7 @@ class CrackAnalysis:
             thin = t["thin"].to_numpy()
             ids = t["crack_id"].to_numpy()[thin]
             pv = partial_volume_area(self.smooth, self.labels, self.n_objects,
-                                     background=th.background, crack_level=th.void_level,
+                                     background=th.background, crack_level=self.void_level[0],
                                      ids=ids)
             t.loc[thin, "area_px"] = pv[ids]
             t.loc[thin, "area_um2"] = pv[ids] * px * px
@@ -410,16 +410,58 @@ class CrackAnalysis:
             # a layered crack's traces, merged into one object, each count in its length;
             # read before denoising, whose blur merges traces 2.5-3 px apart
             from .measure import parallel_traces
-            from .threshold import noise_sigma
             raw = self._scan_lines[0]
             f = parallel_traces(raw, self.labels, self.n_objects, skeleton=self.skeleton,
                                 background=th.background, crack_level=th.crack_level,
-                                noise=noise_sigma(raw))[t["crack_id"].to_numpy()]
+                                samples=self._trace_samples)[t["crack_id"].to_numpy()]
             t["n_traces"] = f
             t["length_px"] *= f
             t["length_um"] *= f
             t["mean_aperture_um"] /= f
         return t
+
+    @functools.cached_property
+    def _trace_samples(self):
+        """The cross-sections read for parallel traces (:func:`semkit.measure.trace_samples`,
+        on the image before denoising, whose blur merges traces 2.5-3 px apart)."""
+        from .measure import trace_samples
+        from .threshold import noise_sigma
+        th = self._threshold
+        raw = self._scan_lines[0]
+        return trace_samples(raw, self.labels, skeleton=self.skeleton, background=th.background,
+                             crack_level=th.crack_level, noise=noise_sigma(raw))
+
+    @functools.cached_property
+    def void_level(self):
+        """``(grey, note)``: the void grey the areas are measured against, and why it differs
+        from the threshold's ``void_level`` (else "").
+
+        A void read on plateaus is checked against the cracks' cross-sections: when nearly
+        all the crack pixels at that grey (within the plateau band) lie on cross-sections
+        read as two or more traces (``LAYERED_VOID_MIN_SHARE``), the plateau is a layered
+        crack's traces merged by the denoising into a band of partial-volume grey, and the
+        void is taken as when no crack shows its core (``THIN_ONLY_CRACK_RATIO`` of the
+        darkest mineral at most). None without the ``auto`` threshold."""
+        th = self._threshold
+        if th is None or th.background is None:
+            return None, ""
+        void = float(th.void_level)
+        if not (th.void_read and np.isfinite(void)) or self.n_objects == 0:
+            return void, ""
+        from .measure import layered_share
+        mineral = th.crack_level + th.contrast
+        band = max(config.VOID_PLATEAU_BAND * th.noise,
+                   config.VOID_PLATEAU_CONTRAST * (mineral - void))
+        share = layered_share(self.object_mask & (self.smooth <= void + band),
+                              *self._trace_samples)
+        if not share >= config.LAYERED_VOID_MIN_SHARE:
+            return void, ""
+        assumed = min(void, config.THIN_ONLY_CRACK_RATIO * mineral)
+        return assumed, (
+            f"the void grey read on plateaus ({void:.4g}) lies {share:.0%} on cross-sections "
+            "of two or more traces: a layered crack's traces merged by the denoising, not the "
+            f"void; areas are measured against a void taken as {assumed:.4g}, at most "
+            f"{config.THIN_ONLY_CRACK_RATIO:g} x the darkest mineral")
 
     @functools.cached_property
     def crack_level(self):
@@ -543,7 +585,7 @@ class CrackAnalysis:
                               skeleton=self.skeleton,
                               background=None if th is None else th.background,
                               crack_level=None if th is None else th.crack_level,
-                              void_level=None if th is None else th.void_level)
+                              void_level=self.void_level[0])
 
     def full_size(self, a):
         """``a`` (an array of ``image``'s shape) padded back to the raw image's shape: the
@@ -632,8 +674,9 @@ class CrackAnalysis:
             return dict(threshold_method="segmenter", threshold_value=self._segmenter_threshold,
                         threshold_ok=True, threshold_note="", contrast_to_noise=float("nan"))
         t = self.thresholded
+        note = "; ".join(n for n in (t.note, self.void_level[1]) if n)
         return dict(threshold_method=t.method, threshold_value=t.value, threshold_ok=bool(t.ok),
-                    threshold_note=t.note, contrast_to_noise=t.contrast_to_noise)
+                    threshold_note=note, contrast_to_noise=t.contrast_to_noise)
 
     def _validity(self, row):
         """``valid`` and ``valid_note``: False with the reasons when a number of the row is

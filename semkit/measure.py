@@ -14,7 +14,7 @@ from . import config
 from .skeleton import skeleton_length, skeleton_nodes, tip_extension
 
 __all__ = ["label_cracks", "object_moments", "is_pore", "crack_table", "partial_volume_area",
-           "mixed_area", "parallel_traces", "CRACK_COLUMNS"]
+           "mixed_area", "parallel_traces", "trace_samples", "layered_share", "CRACK_COLUMNS"]
 
 #: cracks.csv columns (DESIGN.md §4) in order; more follow.
 CRACK_COLUMNS = ["image", "crack_id", "area_um2", "length_um", "mean_aperture_um",
@@ -283,12 +283,69 @@ def mixed_area(image, labels, n, *, skeleton, background, crack_level, area_mask
     return out[:n + 1], share[:n + 1]
 
 
+def trace_samples(image, labels, *, skeleton, background, crack_level,
+                  depth=config.TRACE_MIN_DEPTH, rise=config.TRACE_MIN_RISE,
+                  min_half_width=config.TRACE_MIN_HALF_WIDTH_PX,
+                  max_reach=config.TRACE_MAX_REACH_PX, along=config.TRACE_ALONG_PX,
+                  noise=0.0, noise_z=config.TRACE_NOISE_Z):
+    """The cross-sections :func:`parallel_traces` reads: every other centreline pixel (raster
+    order) and the number of resolved traces across it
+    (:func:`semkit._kernels.cross_section_valleys`; parameters as there).
+
+    Returns
+    -------
+    rr, cc : (K,) ndarray of int64
+        The centreline pixels read.
+    count : (K,) ndarray of int32
+        Traces across each (1 for a single trace, a wide void or a thin line).
+    """
+    from . import _kernels
+    lab = np.ascontiguousarray(labels, np.int32)
+    skel = np.ascontiguousarray(skeleton, bool) & (lab > 0)
+    rr, cc = _kernels.pixel_coords(skel)
+    if rr.size > 1:  # every other centreline pixel reads the mean as well
+        rr, cc = rr[::2].copy(), cc[::2].copy()
+    count = np.ones(rr.size, np.int32)
+    if rr.size:
+        _kernels.cross_section_valleys(
+            np.ascontiguousarray(image, np.float32), np.ascontiguousarray(background, np.float32),
+            lab, skel, rr, cc, float(crack_level), float(depth), float(rise),
+            float(min_half_width), float(max_reach), float(along),
+            float(noise_z * noise * np.sqrt(2.0 / (2 * int(along) + 1))), count)
+    return rr, cc, count
+
+
+def layered_share(mask, rr, cc, count, reach=config.LAYERED_VOID_REACH_PX):
+    """Share of the pixels of ``mask`` within ``reach`` px (a square) of a cross-section
+    read as two or more traces (``rr, cc, count`` of :func:`trace_samples`); NaN when
+    ``mask`` is empty.
+
+    Examples
+    --------
+    >>> m = np.zeros((9, 9), bool); m[3:6, 1:8] = True
+    >>> round(layered_share(m, np.array([4, 4]), np.array([2, 6]), np.array([2, 1]), reach=1), 4)
+    0.4286
+    """
+    import cv2
+    m = np.asarray(mask, bool)
+    n = np.count_nonzero(m)
+    if n == 0:
+        return float("nan")
+    multi = np.zeros(m.shape, np.uint8)
+    sel = np.asarray(count) > 1
+    multi[np.asarray(rr)[sel], np.asarray(cc)[sel]] = 1
+    k = 2 * int(reach) + 1
+    near = cv2.dilate(multi, np.ones((k, k), np.uint8)).view(bool)
+    return float(np.count_nonzero(m & near) / n)
+
+
 def parallel_traces(image, labels, n, *, skeleton, background, crack_level,
                     depth=config.TRACE_MIN_DEPTH, rise=config.TRACE_MIN_RISE,
                     min_half_width=config.TRACE_MIN_HALF_WIDTH_PX,
                     min_share=config.TRACE_MIN_SHARE, max_reach=config.TRACE_MAX_REACH_PX,
                     min_samples=config.TRACE_MIN_BRANCH_SAMPLES,
-                    along=config.TRACE_ALONG_PX, noise=0.0, noise_z=config.TRACE_NOISE_Z):
+                    along=config.TRACE_ALONG_PX, noise=0.0, noise_z=config.TRACE_NOISE_Z,
+                    samples=None):
     """Mean number of resolved parallel traces along each object (1 for a single trace).
 
     A layered shear crack is two or three thin traces a few pixels apart; the detect mask
@@ -327,6 +384,9 @@ def parallel_traces(image, labels, n, *, skeleton, background, crack_level,
     noise : float
         Pixel-noise sigma of ``image`` (:func:`semkit.threshold.noise_sigma`; 0: no noise
         bound).
+    samples : tuple of ndarray, optional
+        The cross-sections as :func:`trace_samples` read them with the same settings (when
+        the caller has them already; the settings above are then not used again).
 
     Returns
     -------
@@ -346,22 +406,15 @@ def parallel_traces(image, labels, n, *, skeleton, background, crack_level,
     >>> t[1:].round(2).tolist()
     [2.0, 1.0]
     """
-    from . import _kernels
     lab = np.ascontiguousarray(labels, np.int32)
     skel = np.ascontiguousarray(skeleton, bool) & (lab > 0)
     traces = np.ones(n + 1, np.float64)
-    rr, cc = _kernels.pixel_coords(skel)
+    rr, cc, count = samples if samples is not None else trace_samples(
+        image, lab, skeleton=skel, background=background, crack_level=crack_level,
+        depth=depth, rise=rise, min_half_width=min_half_width, max_reach=max_reach,
+        along=along, noise=noise, noise_z=noise_z)
     if rr.size == 0:
         return traces
-    if rr.size > 1:  # every other centreline pixel (raster order) reads the mean as well
-        rr, cc = rr[::2].copy(), cc[::2].copy()
-    count = np.ones(rr.size, np.int32)
-    _kernels.cross_section_valleys(np.ascontiguousarray(image, np.float32),
-                                   np.ascontiguousarray(background, np.float32), lab, skel,
-                                   rr, cc, float(crack_level), float(depth), float(rise),
-                                   float(min_half_width), float(max_reach), float(along),
-                                   float(noise_z * noise * np.sqrt(2.0 / (2 * int(along) + 1))),
-                                   count)
     # judged per branch (junction to junction or end): one layered branch of a crack
     # network counts its traces, not the network's mean
     _, junc = skeleton_nodes(skel)

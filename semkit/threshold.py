@@ -96,6 +96,9 @@ class ThresholdResult:
     #: share of the dark class's flat cores on plateaus brighter than the void (a dark phase,
     #: ``DarkLevels.phase_share``; ``auto`` only)
     dark_phase_share: float = 0.0
+    #: True when ``void_level`` was read on plateaus (flat crack cores), False when assumed
+    #: (no crack shows its core) or not ``auto``
+    void_read: bool = False
 
     @property
     def contrast_to_noise(self) -> float:
@@ -625,6 +628,7 @@ def threshold_auto(image, *, area_fraction=config.AUTO_AREA_FRACTION,
     # of the no-dark-class branch and of the candidates below lie well under it
     closed = cv2.morphologyEx(img, cv2.MORPH_CLOSE, np.ones((7, 7), np.uint8))
     note0 = ""
+    void_read = bool(lv.resolved and np.isfinite(lv.flat_crack))  # on the plateaus
     if not np.isfinite(lv.crack) or lv.n_dark < 10:
         # nothing darker than the darkest mineral phase (e.g. a dark biotite as dark as the
         # cracks in a bright mineral): take the crack grey from the darkest pixels and find
@@ -645,6 +649,7 @@ def threshold_auto(image, *, area_fraction=config.AUTO_AREA_FRACTION,
                     f"no dark class, but narrow dark lines hold {share:.2%} of the image: "
                     "cracks as dark as the darkest mineral may be missed"))
         lv = dataclasses.replace(lv, crack=crack)
+        void_read = False
         note0 = "no dark tail below the darkest mineral: cracks found as narrow dark lines"
     sn = lv.noise
     # exclude everything that might be crack (incl. its blurred rim) from the background:
@@ -719,7 +724,8 @@ def threshold_auto(image, *, area_fraction=config.AUTO_AREA_FRACTION,
     return flagged(ThresholdResult(area, detect, "auto", value, frac, ok, note, background=bg,
                                    crack_level=lv.crack, noise=sd,
                                    contrast=lv.mineral - lv.crack, void_level=void,
-                                   dark_phase_share=lv.phase_share))
+                                   dark_phase_share=lv.phase_share,
+                                   void_read=void_read or bool(np.isfinite(detected_void))))
 
 
 def coverage(image, background, crack_level):
