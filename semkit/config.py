@@ -193,8 +193,9 @@ TRACE_NOISE_Z = 2.0
 #: LAYERED_VOID_MIN_SHARE of the pixels of the crack objects within the plateau band of it lie
 #: within LAYERED_VOID_REACH_PX of a cross-section read as two or more traces
 #: (``semkit.measure.layered_share``): a 0.7-px denoising merges two 1.2-px traces 2.5-3 px
-#: apart into a flat band at a partial-volume grey (analytic pairs 0.99-1.0; development and
-#: drawn families at most 0.30, the micro-CT slices 1-10 at most 0.74); the areas are then
+#: apart into a flat band at a partial-volume grey (analytic pairs 0.99-1.0; 0.58-0.84 at
+#: 15-75 degrees under a 1-px blur, missed; development and drawn families at most 0.30, the
+#: micro-CT slices 1-10 at most 0.74); the areas are then
 #: measured against the void assumed as when no crack shows its core (THIN_ONLY_CRACK_RATIO)
 LAYERED_VOID_MIN_SHARE = 0.9
 LAYERED_VOID_REACH_PX = 3

@@ -82,25 +82,29 @@ def test_bad_area_option_is_one_clear_error():
         AnalysisOptions(area="pv")
 
 
-def _lone_pair(spacing, blur):
+def _lone_pair(spacing, blur, angle=0.0):
     """A layered crack alone: two 1.2-px traces (grey 30 in 180) ``spacing`` px apart, 160 px
-    long; its analysis and area / truth."""
+    long at ``angle`` degrees; its analysis and area / truth."""
     from test_parallel_traces import _pair, _render
-    img, _ = _render(_pair(spacing, 0.0), blur=blur)
+    img, _ = _render(_pair(spacing, angle), blur=blur)
     a = analyse_image(img, pixel_size_um=1.0, classify=False, flatten="none")
     return a, float(a.cracks.area_px.sum()) / (2 * 1.2 * 160.0)
 
 
-@pytest.mark.parametrize("spacing,blur", [(2.5, 0.7), (3.0, 1.0)])
-def test_a_layered_crack_alone_is_not_its_own_void(spacing, blur):
+@pytest.mark.parametrize("spacing,blur,angle,lo,hi", [(2.5, 0.7, 0.0, 0.95, 1.05),
+                                                      (3.0, 1.0, 0.0, 0.95, 1.05),
+                                                      (2.5, 0.7, 45.0, 1.1, 1.25)])
+def test_a_layered_crack_alone_is_not_its_own_void(spacing, blur, angle, lo, hi):
     """One layered crack and nothing else dark: the 0.7-px denoising merges the traces into a
-    flat band at grey 123-132, which passes for the void's plateau (area 2.2x and 2.5x against
-    it). Read across before denoising, the band is two traces, so the void is taken as when no
-    crack shows its core (54 here), and the note says why: area within 5 %."""
-    a, ratio = _lone_pair(spacing, blur)
-    assert a.thresholded.void_read and a.thresholded.void_level > 120
+    flat band at grey 108-132, which passes for the void's plateau (area 2.2-2.5x against it).
+    Read across before denoising, the band is two traces, so the void is taken as when no
+    crack shows its core (54 here), and the note says why. Area 0.99x along the pixel grid;
+    1.22x at 45 degrees, by partial volume against the assumed void (54, not the true 30:
+    the bias of thin lines alone)."""
+    a, ratio = _lone_pair(spacing, blur, angle)
+    assert a.thresholded.void_read and a.thresholded.void_level > 100
     assert a.void_level[0] == pytest.approx(0.3 * 180, abs=3)
-    assert abs(ratio - 1) <= 0.05, ratio
+    assert lo <= ratio <= hi, ratio
     row = a.summary()
     assert "two or more traces" in row["threshold_note"] and row["valid"]
 
@@ -116,12 +120,14 @@ def test_a_layered_crack_beside_an_open_one_keeps_the_open_void():
 
 
 @pytest.mark.xfail(strict=True, raises=AssertionError,
-                   reason="known limit (docs/semkit.md, Known limits): traces merged in the "
-                   "image itself read as one band whose grey passes for the void")
-def test_a_layered_crack_merged_in_the_image_is_not_its_own_void():
-    """Two 1.2-px traces 2.5 px apart under a 1-px blur are one band in the image itself (one
-    valley across it even before denoising): its grey, 124, passes for the void's plateau,
-    and the area reads 2.45x, valid. Strict: passes once the area reads within 25 % or the
-    image is flagged."""
-    a, ratio = _lone_pair(2.5, 1.0)
+                   reason="known limit (docs/semkit.md, Known limits): traces the raw image "
+                   "does not part read as one band whose grey passes for the void")
+@pytest.mark.parametrize("spacing,angle", [(2.5, 0.0), (3.0, 30.0)])
+def test_a_layered_crack_merged_in_the_image_is_not_its_own_void(spacing, angle):
+    """Two 1.2-px traces under a 1-px blur that the image before denoising does not part: 2.5
+    px apart (one valley across them), or 3 px apart at 30 degrees (58-84 % of the band on
+    two-trace cross-sections at 15-75 degrees, under the 90 % asked). The band's grey (122-124)
+    passes for the void's plateau, and the area reads 2.45-2.49x, valid. Strict: passes once
+    the area reads within 25 % or the image is flagged."""
+    a, ratio = _lone_pair(spacing, 1.0, angle)
     assert ratio <= 1.25 or not a.summary()["valid"], ratio
