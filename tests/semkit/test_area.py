@@ -96,7 +96,7 @@ def _lone_pair(spacing, blur, angle=0.0):
                                                       (2.5, 0.7, 45.0, 1.1, 1.25)])
 def test_a_layered_crack_alone_is_not_its_own_void(spacing, blur, angle, lo, hi):
     """One layered crack and nothing else dark: the 0.7-px denoising merges the traces into a
-    flat band at grey 108-132, which passes for the void's plateau (area 2.2-2.5x against it).
+    flat band at grey 108-132, which passes for the void's plateau (area 2.1-2.5x against it).
     Read across before denoising, the band is two traces, so the void is taken as when no
     crack shows its core (54 here), and the note says why. Area 0.99x along the pixel grid;
     1.22x at 45 degrees, by partial volume against the assumed void (54, not the true 30:
