@@ -13,8 +13,9 @@ import pandas as pd
 from . import config
 from .skeleton import skeleton_length, skeleton_nodes, tip_extension
 
-__all__ = ["label_cracks", "object_moments", "is_pore", "crack_table", "partial_volume_area",
-           "mixed_area", "parallel_traces", "trace_samples", "layered_share", "CRACK_COLUMNS"]
+__all__ = ["label_cracks", "object_moments", "ellipse_shape", "is_pore", "crack_table",
+           "partial_volume_area", "mixed_area", "parallel_traces", "trace_samples",
+           "layered_share", "CRACK_COLUMNS"]
 
 #: cracks.csv columns (DESIGN.md §4) in order; more follow.
 CRACK_COLUMNS = ["image", "crack_id", "area_um2", "length_um", "mean_aperture_um",
@@ -68,15 +69,21 @@ def object_moments(labels, n, *, origin=False):
     return area, cx, cy, mxx, myy, mxy, m[:, 6], m[:, 7]
 
 
-def is_pore(area, mxx, myy, mxy, *, max_aspect=2.0, min_fill=0.75, min_area_px=30):
-    """Pore test: compact (aspect < ``max_aspect``), full (area / equivalent ellipse >
-    ``min_fill``) and not tiny. Cracks are elongated or, when branched, far from full."""
+def ellipse_shape(area, mxx, myy, mxy):
+    """``(aspect, fill)`` of objects from their second central moments (:func:`object_moments`):
+    the ratio of the principal axes of the equivalent ellipse, and the share of that ellipse
+    the area fills (1 for a full ellipse; far less for a branched network)."""
     tr = mxx + myy
     det = np.sqrt(np.maximum((mxx - myy) ** 2 / 4 + mxy ** 2, 0))
     l1 = tr / 2 + det
     l2 = np.maximum(tr / 2 - det, 1e-9)
-    aspect = np.sqrt(l1 / l2)
-    fill = area / (4 * np.pi * np.sqrt(l1 * l2))
+    return np.sqrt(l1 / l2), area / (4 * np.pi * np.sqrt(l1 * l2))
+
+
+def is_pore(area, mxx, myy, mxy, *, max_aspect=2.0, min_fill=0.75, min_area_px=30):
+    """Pore test: compact (aspect < ``max_aspect``), full (area / equivalent ellipse >
+    ``min_fill``) and not tiny. Cracks are elongated or, when branched, far from full."""
+    aspect, fill = ellipse_shape(area, mxx, myy, mxy)
     return (aspect < max_aspect) & (fill > min_fill) & (area >= min_area_px)
 
 

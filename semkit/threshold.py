@@ -55,6 +55,8 @@ class DarkLevels:
     #: True when every plateau of the dark class lies above the cores of thinner cracks (a
     #: dark phase): ``crack`` is then read on those cores and ``resolved`` is False
     phase_plateaus: bool = False
+    #: True when the void grey was read on compact blobs alone (:func:`_compact_void`)
+    compact_void: bool = False
 
 
 @dataclasses.dataclass
@@ -243,6 +245,7 @@ def dark_class_levels(image) -> DarkLevels:
     resolved = True
     phase_share = 0.0
     below = np.zeros(0, np.float32)   # dark-class pixels under every plateau
+    compact = False
     if tail.size >= 20:
         # interior pixels of cracks >= 3 px wide carry the core grey; thin cracks only
         # partial volumes, so they are used only when there is no interior at all
@@ -274,6 +277,8 @@ def dark_class_levels(image) -> DarkLevels:
             crack = float(np.median(core)) if core.size >= 20 else float(np.median(flat))
             resolved = True
             flat_crack = float(np.median(flat if void is None else flat[void]))
+            compact = _compact_void(dark, flat_at if void is None else flat_at[void], vstep,
+                                    components=comps)
         else:  # all cracks thin: their darkest values are partial volumes; the core is
             # assumed at least as dark as 30 % of the darkest mineral (epoxy / void in BSE)
             th, tc = _hist(tail, float(tail.min()), float(seed), bins=64)
@@ -281,7 +286,50 @@ def dark_class_levels(image) -> DarkLevels:
                         config.THIN_ONLY_CRACK_RATIO * mineral)
     return DarkLevels(mineral, float(sigma), crack, float(seed), n_dark, sn, resolved=resolved,
                       flat_crack=flat_crack, phase_share=phase_share, line_share=line_share,
-                      phase_plateaus=bool(below.size))
+                      phase_plateaus=bool(below.size), compact_void=compact)
+
+
+def _compact_void(dark, at, step=1, components=None):
+    """Whether every plateau pixel holding the void lies in a compact blob.
+
+    The components of ``dark`` (uint8, the image subsampled by ``step``) holding the plateau
+    pixels are opened by a disc ``REJECT_COMPACT_WIDTH_PX`` wide, so thin cracks joined to a
+    blob fall away; a component of the opened mask is a blob when its principal axes lie less
+    than ``VOID_COMPACT_ASPECT`` apart and it fills at least ``VOID_COMPACT_FILL`` of its
+    equivalent ellipse (a pore, a round or lens-shaped grain). ``at`` are the flat indices of
+    the plateau pixels; ``components`` may pass ``cv2.connectedComponents(dark,
+    connectivity=8)``. False when any of them lies outside a blob (a crack shows the void).
+    """
+    import cv2
+
+    from .measure import ellipse_shape, object_moments
+    if at.size == 0:
+        return False
+    n, comp = cv2.connectedComponents(dark, connectivity=8) if components is None \
+        else components
+    lab = comp.ravel()[at]
+    _, _, _, _, _, _, bw, bh, bx, by = object_moments(comp, n - 1, origin=True)
+    k = max(int(round(config.REJECT_COMPACT_WIDTH_PX / step)), 3) | 1
+    disc = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (k, k))
+    rr, cc = np.divmod(at, dark.shape[1])
+    ids, cnt = np.unique(lab, return_counts=True)
+    s2 = float(step) ** 2
+    for c in ids[np.argsort(-cnt)]:  # most plateau pixels first: a crack's ends the search
+        x, y, w, h = int(bx[c]), int(by[c]), int(bw[c]), int(bh[c])
+        one = (comp[y:y + h, x:x + w] == c).view(np.uint8)
+        m, blobs = cv2.connectedComponents(cv2.morphologyEx(one, cv2.MORPH_OPEN, disc),
+                                           connectivity=8)
+        at_c = lab == c
+        b = blobs[rr[at_c] - y, cc[at_c] - x]
+        if (b == 0).any():
+            return False
+        area, _, _, mxx, myy, mxy, _, _ = object_moments(blobs, m - 1)
+        u = np.unique(b)
+        aspect, fill = ellipse_shape(area[u] * s2, mxx[u] * s2, myy[u] * s2, mxy[u] * s2)
+        if not ((aspect < config.VOID_COMPACT_ASPECT)
+                & (fill >= config.VOID_COMPACT_FILL)).all():
+            return False
+    return True
 
 
 def _phase_mask(closed, centres, bounds, k):
@@ -704,6 +752,12 @@ def threshold_auto(image, *, area_fraction=config.AUTO_AREA_FRACTION,
     frac = float(area.mean())
     value = 0.5 * (lv.mineral + lv.crack)
     ok, note = _check_dark_class(img, area, frac, lv)
+    if ok and lv.compact_void and void_read:
+        ok, note = False, (
+            f"the void grey ({void:.4g}) is read only on compact dark blobs (pores or grains, "
+            f"aspect under {config.VOID_COMPACT_ASPECT:g}) and no crack wide enough to show its "
+            "core confirms it: a dark grain or lens may pass for the void (and for a crack), "
+            "and areas scale with the contrast to it")
     phase = "the dark class's plateaus lie above the cores of thinner cracks (a dark phase)" \
         if lv.phase_plateaus else ""
     if not lv.resolved and np.isfinite(detected_void):
