@@ -292,13 +292,14 @@ def dark_class_levels(image) -> DarkLevels:
 def _compact_void(dark, at, step=1, components=None):
     """Whether every plateau pixel holding the void lies in a compact blob.
 
-    The components of ``dark`` (uint8, the image subsampled by ``step``) holding the plateau
-    pixels are opened by a disc ``REJECT_COMPACT_WIDTH_PX`` wide, so thin cracks joined to a
-    blob fall away; a component of the opened mask is a blob when its principal axes lie less
-    than ``VOID_COMPACT_ASPECT`` apart and it fills at least ``VOID_COMPACT_FILL`` of its
-    equivalent ellipse (a pore, a round or lens-shaped grain). ``at`` are the flat indices of
-    the plateau pixels; ``components`` may pass ``cv2.connectedComponents(dark,
-    connectivity=8)``. False when any of them lies outside a blob (a crack shows the void).
+    A blob's principal axes lie less than ``VOID_COMPACT_ASPECT`` apart and it fills at least
+    ``VOID_COMPACT_FILL`` of its equivalent ellipse (a pore, a round or lens-shaped grain).
+    A component of ``dark`` (uint8, the image subsampled by ``step``) holding plateau pixels
+    is one, or it is opened by a disc ``REJECT_COMPACT_WIDTH_PX`` wide, so thin cracks joined
+    to a blob fall away, and its plateau pixels must lie in blobs of the opened mask. ``at``
+    are the flat indices of the plateau pixels; ``components`` may pass
+    ``cv2.connectedComponents(dark, connectivity=8)``. False when any of them lies outside a
+    blob (a crack shows the void).
     """
     import cv2
 
@@ -308,26 +309,31 @@ def _compact_void(dark, at, step=1, components=None):
     n, comp = cv2.connectedComponents(dark, connectivity=8) if components is None \
         else components
     lab = comp.ravel()[at]
-    _, _, _, _, _, _, bw, bh, bx, by = object_moments(comp, n - 1, origin=True)
+    s2 = float(step) ** 2
+
+    def blob(area, mxx, myy, mxy):
+        aspect, fill = ellipse_shape(area * s2, mxx * s2, myy * s2, mxy * s2)
+        return (aspect < config.VOID_COMPACT_ASPECT) & (fill >= config.VOID_COMPACT_FILL)
+
+    area, _, _, mxx, myy, mxy, bw, bh, bx, by = object_moments(comp, n - 1, origin=True)
+    ids, cnt = np.unique(lab, return_counts=True)
+    whole = blob(area[ids], mxx[ids], myy[ids], mxy[ids])
     k = max(int(round(config.REJECT_COMPACT_WIDTH_PX / step)), 3) | 1
     disc = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (k, k))
     rr, cc = np.divmod(at, dark.shape[1])
-    ids, cnt = np.unique(lab, return_counts=True)
-    s2 = float(step) ** 2
-    for c in ids[np.argsort(-cnt)]:  # most plateau pixels first: a crack's ends the search
+    for c in ids[~whole][np.argsort(-cnt[~whole])]:  # most plateau pixels first
         x, y, w, h = int(bx[c]), int(by[c]), int(bw[c]), int(bh[c])
         one = (comp[y:y + h, x:x + w] == c).view(np.uint8)
-        m, blobs = cv2.connectedComponents(cv2.morphologyEx(one, cv2.MORPH_OPEN, disc),
-                                           connectivity=8)
+        opened = cv2.morphologyEx(one, cv2.MORPH_OPEN, disc, borderType=cv2.BORDER_CONSTANT,
+                                  borderValue=0)  # outside the box is not this component
+        m, blobs = cv2.connectedComponents(opened, connectivity=8)
         at_c = lab == c
         b = blobs[rr[at_c] - y, cc[at_c] - x]
         if (b == 0).any():
             return False
-        area, _, _, mxx, myy, mxy, _, _ = object_moments(blobs, m - 1)
         u = np.unique(b)
-        aspect, fill = ellipse_shape(area[u] * s2, mxx[u] * s2, myy[u] * s2, mxy[u] * s2)
-        if not ((aspect < config.VOID_COMPACT_ASPECT)
-                & (fill >= config.VOID_COMPACT_FILL)).all():
+        ba, _, _, bxx, byy, bxy, _, _ = object_moments(blobs, m - 1)
+        if not blob(ba[u], bxx[u], byy[u], bxy[u]).all():
             return False
     return True
 
