@@ -106,14 +106,14 @@ VOID_PLATEAU_CONTRAST = 0.15
 #: development, line and drawn families without laths 0; JPEG ringing 0.3 %, crack grey 80
 #: stress images <= 1.3 %)
 VOID_UNDERCUT_SHARE = 0.05
-#: the void grey is unconfirmed when every plateau pixel holding it lies in a compact blob: a
-#: component of the dark class opened by REJECT_COMPACT_WIDTH_PX (thin cracks joined to it fall
-#: away) with principal axes less than VOID_COMPACT_ASPECT apart and filling at least
-#: VOID_COMPACT_FILL of its equivalent ellipse, not a pore (:func:`semkit.measure.is_pore`). An
-#: opaque grain or an organic lens can be as dark as the void, and no crack wide enough to show
-#: its core confirms the grey: the image is flagged. An open crack is longer: at least 5 x its
-#: aperture in the development, drawn and held-out families (crack networks fill under 0.3 of
-#: their ellipse); no development, drawn or real image has a void held by blobs alone
+#: the void grey is unconfirmed when every plateau pixel holding it lies in a compact blob:
+#: principal axes less than VOID_COMPACT_ASPECT apart, filling at least VOID_COMPACT_FILL of
+#: its equivalent ellipse (a pore, a round or lens-shaped grain), whether its component of the
+#: dark class is one or, opened by REJECT_COMPACT_WIDTH_PX so that thin cracks joined to it fall
+#: away, holds the pixel in one (``semkit.threshold._compact_void``). An opaque grain or organic
+#: lens can be as dark as the void and no crack wide enough to show its core confirms the grey:
+#: the image is flagged. No development, drawn, polyline, line-family or real image is flagged
+#: (held-out 7018, 13019, 13047 and two stress images are; docs/semkit.md, step 3)
 VOID_COMPACT_ASPECT = 4.0
 VOID_COMPACT_FILL = 0.6
 FLAT_CORE_SIGMAS = 4.0

@@ -245,7 +245,7 @@ def dark_class_levels(image) -> DarkLevels:
     resolved = True
     phase_share = 0.0
     below = np.zeros(0, np.float32)   # dark-class pixels under every plateau
-    compact = False
+    compact = False                   # the void's plateaus all on compact blobs
     if tail.size >= 20:
         # interior pixels of cracks >= 3 px wide carry the core grey; thin cracks only
         # partial volumes, so they are used only when there is no interior at all
@@ -265,9 +265,9 @@ def dark_class_levels(image) -> DarkLevels:
         if resolved or full is not None:
             # the void grey leaves out plateaus at a brighter grey (laths of a dark mineral);
             # detection keeps the dark class's median (its levels were set on it)
-            void, phase_share, below = _void_components(
+            void, phase_share, below, compact = _void_components(
                 dark, flat, flat_at, sn, mineral, vstep, components=comps,
-                grey=sub if full is None else a)
+                grey=sub if full is None else a, check_compact=True)
         if below.size:
             # every plateau lies above the cores of thinner cracks: a dark phase; the
             # void is at most as dark as those cores
@@ -277,8 +277,6 @@ def dark_class_levels(image) -> DarkLevels:
             crack = float(np.median(core)) if core.size >= 20 else float(np.median(flat))
             resolved = True
             flat_crack = float(np.median(flat if void is None else flat[void]))
-            compact = _compact_void(dark, flat_at if void is None else flat_at[void], vstep,
-                                    components=comps)
         else:  # all cracks thin: their darkest values are partial volumes; the core is
             # assumed at least as dark as 30 % of the darkest mineral (epoxy / void in BSE)
             th, tc = _hist(tail, float(tail.min()), float(seed), bins=64)
@@ -289,46 +287,54 @@ def dark_class_levels(image) -> DarkLevels:
                       phase_plateaus=bool(below.size), compact_void=compact)
 
 
-def _compact_void(dark, at, step=1, components=None):
+def _compact_void(comp, at, moments, step=1):
     """Whether every plateau pixel holding the void lies in a compact blob.
 
     A blob's principal axes lie less than ``VOID_COMPACT_ASPECT`` apart and it fills at least
     ``VOID_COMPACT_FILL`` of its equivalent ellipse (a pore, a round or lens-shaped grain).
-    A component of ``dark`` (uint8, the image subsampled by ``step``) holding plateau pixels
-    is one, or it is opened by a disc ``REJECT_COMPACT_WIDTH_PX`` wide, so thin cracks joined
-    to a blob fall away, and its plateau pixels must lie in blobs of the opened mask. ``at``
-    are the flat indices of the plateau pixels; ``components`` may pass
-    ``cv2.connectedComponents(dark, connectivity=8)``. False when any of them lies outside a
-    blob (a crack shows the void).
+    A component of the dark class holding plateau pixels is one, or it is opened by a disc
+    ``REJECT_COMPACT_WIDTH_PX`` wide, so thin cracks joined to a blob fall away, and its
+    plateau pixels must lie in blobs of the opened mask.
+
+    Parameters
+    ----------
+    comp : (M, N) ndarray of int32
+        The dark class's 8-connected components (the image subsampled by ``step``).
+    at : (K,) ndarray of int
+        Flat indices (in ``comp``) of the plateau pixels holding the void.
+    moments : tuple
+        ``object_moments(comp, n, origin=True)``.
+
+    Returns
+    -------
+    bool
+        False when any plateau pixel lies outside a blob (a crack shows the void).
     """
     import cv2
 
     from .measure import ellipse_shape, object_moments
     if at.size == 0:
         return False
-    n, comp = cv2.connectedComponents(dark, connectivity=8) if components is None \
-        else components
-    lab = comp.ravel()[at]
     s2 = float(step) ** 2
 
     def blob(area, mxx, myy, mxy):
         aspect, fill = ellipse_shape(area * s2, mxx * s2, myy * s2, mxy * s2)
         return (aspect < config.VOID_COMPACT_ASPECT) & (fill >= config.VOID_COMPACT_FILL)
 
-    area, _, _, mxx, myy, mxy, bw, bh, bx, by = object_moments(comp, n - 1, origin=True)
+    area, _, _, mxx, myy, mxy, bw, bh, bx, by = moments
+    lab = comp.ravel()[at]
     ids, cnt = np.unique(lab, return_counts=True)
     whole = blob(area[ids], mxx[ids], myy[ids], mxy[ids])
     k = max(int(round(config.REJECT_COMPACT_WIDTH_PX / step)), 3) | 1
     disc = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (k, k))
-    rr, cc = np.divmod(at, dark.shape[1])
+    rr, cc = np.divmod(at, comp.shape[1])
     for c in ids[~whole][np.argsort(-cnt[~whole])]:  # most plateau pixels first
         x, y, w, h = int(bx[c]), int(by[c]), int(bw[c]), int(bh[c])
         one = (comp[y:y + h, x:x + w] == c).view(np.uint8)
         opened = cv2.morphologyEx(one, cv2.MORPH_OPEN, disc, borderType=cv2.BORDER_CONSTANT,
                                   borderValue=0)  # outside the box is not this component
         m, blobs = cv2.connectedComponents(opened, connectivity=8)
-        at_c = lab == c
-        b = blobs[rr[at_c] - y, cc[at_c] - x]
+        b = blobs[rr[lab == c] - y, cc[lab == c] - x]
         if (b == 0).any():
             return False
         u = np.unique(b)
@@ -441,7 +447,8 @@ def _flat_core_values(image, interior, step, max_range):
     return image[rr, cc][flat], at
 
 
-def _void_components(dark, flat, flat_at, noise, mineral, step=1, components=None, grey=None):
+def _void_components(dark, flat, flat_at, noise, mineral, step=1, components=None, grey=None,
+                     check_compact=False):
     """Which flat-core pixels of the dark class hold the void of the open cracks.
 
     Pores (compact, full components of ``dark``, :func:`semkit.measure.is_pore` at the full
@@ -461,7 +468,8 @@ def _void_components(dark, flat, flat_at, noise, mineral, step=1, components=Non
     phase's, and those darker pixels are returned.
 
     ``components`` may pass ``cv2.connectedComponents(dark, connectivity=8)`` when the caller
-    has it already.
+    has it already. With ``check_compact``, whether the void's plateau pixels all lie on
+    compact blobs is read too (:func:`_compact_void`).
 
     Returns
     -------
@@ -473,6 +481,9 @@ def _void_components(dark, flat, flat_at, noise, mineral, step=1, components=Non
         plateau is undercut).
     below : ndarray of float32
         Grey of the dark pixels under every plateau (empty unless they undercut them).
+    compact : bool
+        The void's plateau pixels all lie on compact blobs (False unless ``check_compact``,
+        and when the plateaus are undercut).
     """
     import cv2
 
@@ -480,7 +491,8 @@ def _void_components(dark, flat, flat_at, noise, mineral, step=1, components=Non
     n, comp = cv2.connectedComponents(dark, connectivity=8) if components is None \
         else components
     lab = comp.ravel()[flat_at]
-    area, _, _, mxx, myy, mxy, _, _ = object_moments(comp, n - 1)
+    moments = object_moments(comp, n - 1, origin=True)
+    area, _, _, mxx, myy, mxy = moments[:6]
     s2 = float(step) ** 2
     pore = is_pore(area * s2, mxx * s2, myy * s2, mxy * s2)
     pore[0] = False
@@ -514,10 +526,11 @@ def _void_components(dark, flat, flat_at, noise, mineral, step=1, components=Non
                     and at.size >= config.VOID_UNDERCUT_SHARE * open_px:
                 below = gv[at]
     if below.size:
-        return np.zeros(len(flat), bool), 1.0, below
+        return np.zeros(len(flat), bool), 1.0, below, False
+    compact = check_compact and _compact_void(comp, flat_at[keep[lab]], moments, step)
     if keep[lab].all():
-        return None, 0.0, below
-    return keep[lab], float(cnt[big[above]].sum()) / max(len(flat), 1), below
+        return None, 0.0, below, compact
+    return keep[lab], float(cnt[big[above]].sum()) / max(len(flat), 1), below, compact
 
 
 def _detected_void(image, mask, noise, mineral):
@@ -544,7 +557,7 @@ def _detected_void(image, mask, noise, mineral):
     if found is None:
         return float("nan")
     flat, flat_at, comps = found
-    void, _, below = _void_components(mask, flat, flat_at, noise, mineral, components=comps,
+    void, _, below, _ = _void_components(mask, flat, flat_at, noise, mineral, components=comps,
                                       grey=image)
     if below.size:
         return float("nan")
