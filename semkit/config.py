@@ -307,7 +307,9 @@ P_TOL_MEDIAN = 0.15
 DATABAR_MIN_FLAT = 0.3
 #: grey tolerance (8-bit) around the row's modal grey
 DATABAR_TOL_GREY = 6
-#: the three rows next to a bar are sample: at most this flat (a round core's corners fade)
+#: the three rows next to a bar are sample: at most this share of each at the bar's grey (a round
+#: core's corners fade into the surround; a sample clipped at the other end of the grey scale is
+#: flat, but not at the bar's grey)
 DATABAR_SAMPLE_FLAT = 0.5
 #: ... and the median bar row is at least this flat (text covers a minority of a bar; a noisy
 #: image of large uniform grains is 40-50 % flat in every row)
@@ -329,6 +331,10 @@ SCALEBAR_MIN_FRACTION = 0.03
 SCALEBAR_WORD_GAP = 1.2
 #: a scale-bar label is used only when every glyph correlates at least this well
 SCALEBAR_MIN_CONFIDENCE = 0.65
+#: ... and only when every glyph's best score leads the best score of any other character by at
+#: least this much (correct readings of the test fonts lead by 0.096 or more; a Hershey "5" read
+#: as "6" by 0.002-0.056)
+SCALEBAR_MIN_MARGIN = 0.08
 #: a given pixel size and the scale bar's disagreeing by more than this is noted
 SCALEBAR_AGREE_FRACTION = 0.05
 #: a surround (black or white outside the sample): share of the border pixels it must hold

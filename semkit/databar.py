@@ -12,7 +12,9 @@ core, whose middle third is sample.
 next to it with a small template OCR (glyphs rendered from the DejaVu fonts shipped with
 matplotlib, compared by normalised correlation on size-normalised binary glyphs): digits,
 ``.``, and the units ``nm``, ``µm`` (or ``um``), ``mm``. The pixel size is the written length
-over the line's length in pixels. A label read with low glyph confidence is not used.
+over the line's length in pixels. A label read with low glyph confidence is not used, nor one
+with a glyph that reads almost as well as another character (a "5" drawn in a font unlike the
+templates can read as "6": a confident misreading would scale every figure).
 """
 from __future__ import annotations
 
@@ -51,6 +53,8 @@ class ScaleBar:
     length_um: float        #: the label's length in µm (NaN if unreadable)
     confidence: float       #: lowest glyph correlation of the label (0-1)
     box: tuple              #: (row0, col0, row1, col1) of the line in the image
+    margin: float = 1.0     #: least lead of a glyph's reading over its next-best character
+    ambiguous: str = ""     #: the glyph read with the least lead and its runner-up ("6/5")
 
     @property
     def pixel_size_um(self):
@@ -164,16 +168,20 @@ def find_data_bar(image, *, min_flat=config.DATABAR_MIN_FLAT):
         if n < max(config.DATABAR_MIN_ROWS, int(config.DATABAR_MIN_FRACTION * h)) or \
                 n > config.DATABAR_MAX_FRACTION * h:
             continue
-        # an abrupt start: the rows just past the bar are sample (a round core's corners fade),
-        # and the background spans the width in most bar rows (a core's corner does not)
-        if fl[n:n + 3].max(initial=0.0) > config.DATABAR_SAMPLE_FLAT or \
-                np.mean(th[:n] >= min_flat) < 0.5:
+        # an abrupt start: the rows just past the bar are sample, not the bar's grey (a round
+        # core's corners fade; a sample clipped at the other end of the grey scale is flat
+        # too, but not at the bar's grey), and the background spans the width in most bar
+        # rows (a core's corner does not)
+        r0, r1 = (h - n, h) if side == "bottom" else (0, n)
+        past = sub[max(r0 - 3, 0):r0] if side == "bottom" else sub[r1:r1 + 3]
+        at_bar = (np.abs(past.astype(np.int16) - ref) <= config.DATABAR_TOL_GREY).mean(
+            axis=1) if past.size else np.zeros(1)
+        if at_bar.max() > config.DATABAR_SAMPLE_FLAT or np.mean(th[:n] >= min_flat) < 0.5:
             continue
         # a bar is flat: most of its rows are mostly background, far flatter than the sample
         # (a noisy image of large uniform grains has rows 40-50 % "flat" everywhere)
         if np.median(fl[:n]) < config.DATABAR_MEDIAN_FLAT:
             continue
-        r0, r1 = (h - n, h) if side == "bottom" else (0, n)
         # a bar carries text or a scale bar at the other end of the grey scale
         rows = _to_u8(image, rows=slice(r0, r1))
         ink = rows >= 255 - config.DATABAR_INK_GREY if ref < 128 else \
@@ -246,9 +254,15 @@ def _words(glyphs):
 
 
 def _read_glyphs(boxes, height):
-    """OCR of glyph boxes (sorted by x): text and the lowest correlation."""
+    """OCR of glyph boxes (sorted by x).
+
+    Returns the text, the lowest template correlation of its glyphs, and the least lead of
+    a glyph's best score over the best score of any other character, with that glyph and its
+    runner-up (``"6/5"``; ``""`` when no glyph was scored).
+    """
     names, vecs, aspects = _templates()
-    text, conf, prev_x1 = "", 1.0, None
+    names_arr = np.asarray(names)
+    text, conf, margin, which, prev_x1 = "", 1.0, 1.0, "", None
     for (r0, c0, r1, c1), g in boxes:
         h = r1 - r0
         if h < 0.35 * height and (c1 - c0) < 0.5 * height:
@@ -258,12 +272,16 @@ def _read_glyphs(boxes, height):
             score = vecs @ v - 0.5 * np.abs(np.log(aspects / asp))
             k = int(np.argmax(score))
             ch, c = names[k], float(vecs[k] @ v)
+            other = np.where(names_arr == ch, -np.inf, score)
+            j = int(np.argmax(other))
+            if score[k] - other[j] < margin:
+                margin, which = float(score[k] - other[j]), f"{ch}/{names[j]}"
         if prev_x1 is not None and c0 - prev_x1 > 0.45 * height:
             text += " "
         text += ch
         conf = min(conf, c)
         prev_x1 = c1
-    return text, conf
+    return text, conf, margin, which
 
 
 def read_scale_bar(image, bar):
@@ -324,7 +342,7 @@ def read_scale_bar(image, bar):
         boxes = [((g[0], g[1], g[2], g[3]), np.isin(lab2[g[0]:g[2], g[1]:g[3]], g[4]))
                  for g in word]
         height = float(max(g[2] - g[0] for g in word))
-        text, conf = _read_glyphs(boxes, height)
+        text, conf, margin, which = _read_glyphs(boxes, height)
         m = re.fullmatch(r"(\d+(?:\.\d+)?) ?(nm|µm|um|mm)", text)
         if not m:
             continue
@@ -332,15 +350,15 @@ def read_scale_bar(image, bar):
         cx = (min(g[1] for g in word) + max(g[3] for g in word)) / 2
         dist = abs(cy - (y0 + h / 2)) + max(0.0, abs(cx - (x0 + w / 2)) - w / 2)
         if best is None or dist < best[0]:
-            best = (dist, text, conf, float(m.group(1)) * _UNIT_UM[m.group(2)])
+            best = (dist, text, conf, float(m.group(1)) * _UNIT_UM[m.group(2)], margin, which)
     if best is None:
-        text, conf, length_um = "", 0.0, float("nan")
+        text, conf, length_um, margin, which = "", 0.0, float("nan"), 0.0, ""
     else:
-        _, text, conf, length_um = best
-        if conf < config.SCALEBAR_MIN_CONFIDENCE:
+        _, text, conf, length_um, margin, which = best
+        if conf < config.SCALEBAR_MIN_CONFIDENCE or margin < config.SCALEBAR_MIN_MARGIN:
             length_um = float("nan")
     return ScaleBar(length, text, length_um, conf,
-                    (bar.row0 + y0, x0, bar.row0 + y0 + h, x0 + w))
+                    (bar.row0 + y0, x0, bar.row0 + y0 + h, x0 + w), margin, which)
 
 
 def crop_data_bar(image, *, pixel_size_um, pixel_size_source):
@@ -368,7 +386,11 @@ def crop_data_bar(image, *, pixel_size_um, pixel_size_source):
     if sb is None:
         return out
     if not np.isfinite(sb.length_um):
-        out.note = f"scale bar label unreadable ({sb.text!r})"
+        why = ""
+        if sb.text and sb.confidence >= config.SCALEBAR_MIN_CONFIDENCE:
+            read, alt = sb.ambiguous.split("/")
+            why = f": its {read!r} reads almost as well as {alt!r}"
+        out.note = f"scale bar label unreadable ({sb.text!r}{why})"
         return out
     px = sb.pixel_size_um
     if pixel_size_source == "default":

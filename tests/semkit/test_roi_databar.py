@@ -186,6 +186,42 @@ def test_unreadable_label_is_not_used_and_is_said():
     assert "unreadable" in row["pixel_size_note"] and not row["valid"]
 
 
+
+def test_a_label_glyph_that_reads_almost_as_another_is_not_used(monkeypatch):
+    """OpenCV's Hershey "5" at stroke 2 correlates with the templates' "6" nearly as well as
+    with their "5": read anyway, "500 um" becomes "600 um" (pixel size +20 %, every figure in
+    um wrong while looking fine). The label is not used and the note names the two glyphs."""
+    from semkit import config
+    s = make_sem_image((384, 512), n_cracks=4, seed=9)
+    bar = np.zeros((60, 512), np.uint8)
+    cv2.putText(bar, "500 um", (280, 32), cv2.FONT_HERSHEY_SIMPLEX, 0.6, 255, 2, cv2.LINE_AA)
+    cv2.rectangle(bar, (280, 44), (280 + 150 - 1, 47), 255, -1)
+    img = np.vstack([s.image, bar])
+    with monkeypatch.context() as m:
+        m.setattr(config, "SCALEBAR_MIN_MARGIN", 0.0)
+        assert read_scale_bar(img, find_data_bar(img)).length_um == 600.0   # the misreading
+    sb = read_scale_bar(img, find_data_bar(img))
+    assert np.isnan(sb.length_um) and sb.ambiguous == "6/5" and sb.margin < 0.01
+    row = analyse_image(img, pixel_size_um=1.0, pixel_size_source="default").summary()
+    assert row["pixel_size_source"] == "default" and not row["valid"]
+    assert "'6' reads almost as well as '5'" in row["pixel_size_note"]
+
+
+def test_a_bar_under_a_sample_clipped_at_the_other_end_is_found():
+    """A black bar under a sample whose grains are clipped white: the rows above the bar are
+    flat (at 255), which once read as a round core's fading corner, and the bar with its text
+    was analysed as sample."""
+    s = make_sem_image((384, 512), n_cracks=4, seed=9)
+    img = s.image.copy()
+    img[300:384] = np.where(np.arange(512) % 100 < 80, 255, img[300:384])  # clipped grains
+    bar = np.zeros((46, 512), np.uint8)
+    cv2.putText(bar, "100 um", (300, 22), cv2.FONT_HERSHEY_SIMPLEX, 0.6, 255, 1, cv2.LINE_AA)
+    cv2.rectangle(bar, (300, 32), (399, 35), 255, -1)
+    img = np.vstack([img, bar])
+    b = find_data_bar(img)
+    assert b is not None and (b.row0, b.row1) == (384, 430)
+    assert read_scale_bar(img, b).pixel_size_um == pytest.approx(1.0)
+
 def test_a_noisy_image_of_large_uniform_grains_has_no_data_bar():
     """Development image 6 (``benchmarks/semkit_dev_family.py``): 16-bit, noise 10 grey, grains
     of nearly one grey along the bottom, dark cracks as "ink". Every row is 40-50 % within the
