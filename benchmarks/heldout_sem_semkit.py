@@ -81,6 +81,7 @@ def main(argv=None):
     ok = m.P_status == "ok"
     ratio = np.maximum(m.P / m.P_true, m.P_true / m.P)
     bar = m.has_bar == 1
+    read = bar & (m.pixel_size_source == "scale_bar")   # not a default that happens to match
     s = dict(
         n_images=len(m), megapixels=float((m.height * m.width).sum() / 1e6), wall_s=wall,
         n_failed=int(_given(m.error).sum()) if "error" in m else 0,
@@ -93,9 +94,8 @@ def main(argv=None):
         length_err_median_valid=float(m.length_err[valid].abs().median()),
         confidently_wrong=list(m.image[wrong]),
         n_with_bar=int(bar.sum()),
-        n_bar_scale_read_right=int((bar & (m.pixel_size_err.abs() < 0.01)).sum()),
-        n_bar_scale_read_wrong=int((bar & (m.pixel_size_source == "scale_bar")
-                                    & (m.pixel_size_err.abs() >= 0.01)).sum()),
+        n_bar_scale_read_right=int((read & (m.pixel_size_err.abs() < 0.01)).sum()),
+        n_bar_scale_read_wrong=int((read & (m.pixel_size_err.abs() >= 0.01)).sum()),
         n_bar_scale_unread_flagged=int((bar & m.pixel_size_note.fillna("").str.contains(
             "unreadable")).sum()),
         n_bar_not_found=int((bar & ~_given(m.data_bar_rows)).sum()),

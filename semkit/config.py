@@ -332,8 +332,9 @@ SCALEBAR_WORD_GAP = 1.2
 #: a scale-bar label is used only when every glyph correlates at least this well
 SCALEBAR_MIN_CONFIDENCE = 0.65
 #: ... and only when every glyph's best score leads the best score of any other character by at
-#: least this much (correct readings of the test fonts lead by 0.096 or more; a Hershey "5" read
-#: as "6" by 0.002-0.056)
+#: least this much (set on the second held-out generator's misread Hershey "5"s, which lead "6"
+#: by 0.002-0.056; the test labels' glyphs lead by 0.24 or more; a Hershey "5" read right can lead
+#: by as little as 0.01-0.04 and is then given up, unread and flagged)
 SCALEBAR_MIN_MARGIN = 0.08
 #: a given pixel size and the scale bar's disagreeing by more than this is noted
 SCALEBAR_AGREE_FRACTION = 0.05
