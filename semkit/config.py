@@ -92,10 +92,10 @@ DETECTED_CORE_PX = 2.5
 #: 3-px lines cross (benchmarks/line_family.py hairlines) the flat spot holds <= 28 px of partial
 #: volume; the cracks >= 4.6 px wide of development images 9, 15, 18 hold 70-282 px
 DETECTED_PLATEAU_MIN_PX = 50
-#: components of the dark class whose plateau (median of at least VOID_PLATEAU_MIN_PX flat-core
-#: pixels) lies more than VOID_PLATEAU_BAND noise sigmas, and VOID_PLATEAU_CONTRAST of the
-#: mineral-to-void contrast, above the darkest open (non-pore) plateau are a dark phase's laths:
-#: left out of the crack and void greys
+#: components of the dark class whose plateau (median of their flat-core pixels) lies more than
+#: VOID_PLATEAU_BAND noise sigmas, and VOID_PLATEAU_CONTRAST of the mineral-to-void contrast,
+#: above the darkest open (non-pore) plateau of at least VOID_PLATEAU_MIN_PX pixels (the pores'
+#: when no open one has that many) are a dark phase's laths: left out of the crack and void greys
 VOID_PLATEAU_MIN_PX = 20
 VOID_PLATEAU_BAND = 6.0
 VOID_PLATEAU_CONTRAST = 0.15

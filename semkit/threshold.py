@@ -455,11 +455,16 @@ def _void_components(dark, flat, flat_at, noise, mineral, step=1, components=Non
     image's scale: ``dark`` is subsampled by ``step``) are left out when at least
     ``MIN_FLAT_CORE_PX`` flat pixels remain: a pore's flat core, often darker than the
     cracks' (a deeper hole), would otherwise outweigh the few flat pixels of cracks a few px
-    wide. Every other 8-connected component with at least ``VOID_PLATEAU_MIN_PX`` flat-core
-    pixels has a plateau grey (their median); the darkest is the void, and components whose
-    plateau lies more than ``VOID_PLATEAU_BAND`` above it (noise sigmas, or that share of the
-    mineral-to-void contrast, whichever is larger) are a dark phase (laths of a dark mineral),
-    not open cracks.
+    wide. Every other 8-connected component holding flat-core pixels has a plateau grey
+    (their median); the darkest of those with at least ``VOID_PLATEAU_MIN_PX`` is the void,
+    and components, small ones too, whose plateau lies more than ``VOID_PLATEAU_BAND`` above
+    it (noise sigmas, or that share of the mineral-to-void contrast, whichever is larger) are
+    a dark phase (laths of a dark mineral), not open cracks: many small laths together would
+    otherwise outweigh one crack's plateau. When no open component holds that many, the
+    pores' plateaus are the reference instead (a dark mineral in round grains passes for
+    pores, and the few open flat pixels left may be a lath's), provided some open component
+    lies within the band of the darkest (pores darker than every crack, a deeper hole, show
+    no dark phase).
 
     With ``grey`` (the image ``dark`` was taken from, at its scale), the darkest plateau is
     checked too: partial volumes are brighter than the void, never darker, so when at least
@@ -503,17 +508,28 @@ def _void_components(dark, flat, flat_at, noise, mineral, step=1, components=Non
     cnt = np.bincount(lab, minlength=n)
     big = np.flatnonzero((cnt >= config.VOID_PLATEAU_MIN_PX) & keep)
     big = big[big > 0]
-    above = np.zeros(0, bool)
-    if big.size:
+    # with no open plateau of VOID_PLATEAU_MIN_PX, the pores' plateaus are the reference
+    ref = big if big.size else np.flatnonzero((cnt >= config.VOID_PLATEAU_MIN_PX) & ~keep)
+    ref = ref[ref > 0]
+    above = np.zeros(0, np.int64)
+    if ref.size:
+        # every component holding flat-core pixels has a plateau grey (their median); the
+        # darkest of the reference is the void, and any kept component, small ones too,
+        # lying more than the band above it is a dark phase's
+        held = np.union1d(ref, np.flatnonzero(cnt > 0))
+        held = held[held > 0]
         order = np.argsort(lab, kind="stable")
         starts = np.r_[0, np.cumsum(cnt)[:-1]]
-        plateau = np.array([np.median(flat[order[starts[k]:starts[k] + cnt[k]]]) for k in big])
-        void = float(plateau.min())
+        plateau = np.array([np.median(flat[order[starts[k]:starts[k] + cnt[k]]]) for k in held])
+        void = float(plateau[np.isin(held, ref)].min())
         band = max(config.VOID_PLATEAU_BAND * noise,
                    config.VOID_PLATEAU_CONTRAST * (float(mineral) - void))
-        above = plateau > void + band
-        keep[big[above]] = False
-        if grey is not None:
+        kept = keep[held]
+        above = held[kept & (plateau > void + band)]
+        if not big.size and not (kept & (plateau <= void + band)).any():
+            above = above[:0]   # pores darker than every crack: no evidence of a dark phase
+        keep[above] = False
+        if grey is not None and big.size:
             # partial volumes are brighter than the void, never darker: dark pixels (not
             # pores) well below the darkest plateau show a darker void, and the plateaus
             # are a dark phase
@@ -530,7 +546,7 @@ def _void_components(dark, flat, flat_at, noise, mineral, step=1, components=Non
     compact = check_compact and _compact_void(comp, flat_at[keep[lab]], moments, step)
     if keep[lab].all():
         return None, 0.0, below, compact
-    return keep[lab], float(cnt[big[above]].sum()) / max(len(flat), 1), below, compact
+    return keep[lab], float(cnt[above].sum()) / max(len(flat), 1), below, compact
 
 
 def _detected_void(image, mask, noise, mineral):
