@@ -697,6 +697,12 @@ class CrackAnalysis:
             notes.append(f"noise: the crack contrast is {cnr:.1f} sigmas of the fine-scale "
                          f"noise (under {config.MIN_CONTRAST_TO_NOISE:g}, noise specks pass for "
                          "cracks and faint cracks are lost)")
+        walls = self._bright_walls()
+        if walls >= config.BRIGHT_WALLS_MIN_LIFT:
+            notes.append(f"bright walls: the grey beside the cracks lies {walls:.2f} of the crack "
+                         "contrast above the rock around them (median), an edge effect "
+                         "(secondary electrons) or a phase-contrast fringe: partial-volume "
+                         "widths read narrow and thin cracks between bright walls are lost")
         faint = self._faint_length_share()
         if faint >= config.FAINT_MAX_LENGTH_SHARE:
             notes.append(f"faint lines: {faint:.0%} of the crack centreline lies less than "
@@ -747,6 +753,47 @@ class CrackAnalysis:
         r = self.region.mask[::2, ::2]
         v = self.image[::2, ::2][r]
         return float(np.count_nonzero(v == v.max())) / v.size if v.size else 0.0
+
+    def _bright_walls(self):
+        """How far the grey beside the accepted cracks (``BRIGHT_WALLS_NEAR_PX`` from them)
+        lies above the rock around the same place: the median, over those wall pixels, of the
+        grey minus the mean grey of the rock ``BRIGHT_WALLS_FAR_PX`` from every detected object
+        within ``BRIGHT_WALLS_WINDOW_PX`` of the pixel, as a share of the crack contrast (the
+        sample's median local background minus the void grey). Each wall pixel is compared with
+        the rock of its own neighbourhood, so grains of other greys beside a crack weigh as
+        little as they do around it. Read on the image at half size (2 x 2 blocks: a block is
+        crack or object when any of its pixels is; its grey, every other pixel's). NaN without
+        the ``auto`` threshold, with a segmenter, or with fewer than
+        ``BRIGHT_WALLS_MIN_WALL_PX`` wall pixels compared. The blurred wall of a crack is
+        darker than the rock; an edge effect or a fringe makes it brighter."""
+        th = self._threshold
+        if self.options.segmenter is not None or th is None or th.background is None \
+                or self.cracks.empty:
+            return float("nan")
+        import cv2
+
+        def free(labels):   # half-size blocks holding no object pixel, as uint8
+            m = cv2.dilate((labels > 0).view(np.uint8), np.ones((2, 2), np.uint8),
+                           anchor=(0, 0))[::2, ::2]
+            return np.ascontiguousarray(m ^ 1)
+
+        d = 2.0 * cv2.distanceTransform(free(self.crack_labels), cv2.DIST_L2, 3)
+        d_all = 2.0 * cv2.distanceTransform(free(self.labels), cv2.DIST_L2, 3)
+        region = self.region.mask[::2, ::2]
+        img = np.ascontiguousarray(np.asarray(self.smooth, np.float32)[::2, ::2])
+        (n0, n1), (f0, f1) = config.BRIGHT_WALLS_NEAR_PX, config.BRIGHT_WALLS_FAR_PX
+        rock = ((d >= f0) & (d <= f1) & (d_all >= f0) & region).astype(np.float32)
+        win = (config.BRIGHT_WALLS_WINDOW_PX // 2) | 1
+        total = cv2.boxFilter(img * rock, -1, (win, win), normalize=False)
+        count = cv2.boxFilter(rock, -1, (win, win), normalize=False)
+        wall = (d >= n0) & (d <= n1) & region & (count >= config.BRIGHT_WALLS_MIN_PX)
+        if np.count_nonzero(wall) < config.BRIGHT_WALLS_MIN_WALL_PX:
+            return float("nan")
+        bg = float(np.median(th.background[::4, ::4][self.region.mask[::4, ::4]]))
+        contrast = bg - float(self.void_level[0])
+        if not contrast > 0:
+            return float("nan")
+        return float(np.median(img[wall] - total[wall] / count[wall])) / contrast
 
     def _faint_length_share(self):
         """Share of the crack centreline length (:func:`_centreline_px`) in objects whose core

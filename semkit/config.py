@@ -64,6 +64,22 @@ MIN_CONTRAST_TO_NOISE = 12.0
 #: with their bright mineral clipped: area -17 to -23 %, length to -16 %; the development
 #: family, micro-CT, sample, granite, Obara and shale images: <= 0.2 %)
 SATURATED_MAX_SHARE = 0.01
+#: bright crack walls: the grey BRIGHT_WALLS_NEAR_PX px from the accepted cracks lies, by its
+#: median over those pixels, at least BRIGHT_WALLS_MIN_LIFT of the crack contrast above the mean
+#: grey of the rock BRIGHT_WALLS_FAR_PX px from every detected object in the
+#: BRIGHT_WALLS_WINDOW_PX window around each (at least BRIGHT_WALLS_MIN_PX px of it; at least
+#: BRIGHT_WALLS_MIN_WALL_PX wall pixels compared): an edge effect (secondary electrons) or a
+#: phase-contrast fringe brightens the walls, partial-volume widths read narrow and thin cracks
+#: between bright walls are lost (read at half size: px here are full-size px, counts half-size
+#: ones). Blur alone makes the walls darker than the rock, never brighter. Images without the
+#: effect read <= 0.033 (development, drawn, line, polyline, stress, speed-set, first held-out
+#: generator, shale and Obara images), those with it 0.014-0.32 (docs/semkit.md, Validity)
+BRIGHT_WALLS_NEAR_PX = (2.0, 4.0)
+BRIGHT_WALLS_FAR_PX = (6.0, 12.0)
+BRIGHT_WALLS_WINDOW_PX = 25
+BRIGHT_WALLS_MIN_PX = 5
+BRIGHT_WALLS_MIN_WALL_PX = 50
+BRIGHT_WALLS_MIN_LIFT = 0.035
 
 # --- scan-line noise (semkit.scanlines) ---
 #: rows are compared with their vertical Gaussian smoothing of this sigma (rows)

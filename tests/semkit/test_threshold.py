@@ -336,6 +336,30 @@ def test_a_clipped_image_is_flagged_saturated():
     assert not row["valid"]
 
 
+def test_bright_crack_walls_are_flagged():
+    """Development image 14 with a bright rim (a quarter of the grey range, blurred by 1 px)
+    along every crack wall, as a secondary-electron edge effect makes it: area -22 %, valid
+    before. The walls' upper quartile lies >= 0.05 of the crack contrast above the rock's:
+    flagged ``bright walls``. Without the rim the walls are darker than the rock (blur), and
+    the image stays valid."""
+    import cv2
+
+    from semkit.analysis import analyse_image
+    s = dev_scene(14)
+    m = (s.crack_labels > 0).astype(np.uint8)
+    ring = cv2.dilate(m, np.ones((5, 5), np.uint8)).astype(bool) & (m == 0)
+    rim = cv2.GaussianBlur(ring.astype(np.float32), (0, 0), 1.0) * 0.25 * 255
+    bright = np.clip(np.rint(s.image + rim), 0, 255).astype(np.uint8)
+    truth = float(s.cracks["area_cov_px"].sum()) * s.pixel_size_um ** 2
+    for img, flagged in ((s.image, False), (bright, True)):
+        a = analyse_image(img, pixel_size_um=s.pixel_size_um, name="x", classify=False)
+        row = a.summary()
+        assert (a._bright_walls() >= config.BRIGHT_WALLS_MIN_LIFT) == flagged, a._bright_walls()
+        assert ("bright walls:" in row["valid_note"]) == flagged, row["valid_note"]
+        assert row["valid"] != flagged
+    assert row["crack_area_um2"] / truth - 1 < -0.15   # what the flag is for
+
+
 def test_normalised_float_and_signed_images_read_as_the_8_bit_one():
     """A float image in 0..1 read area -12 % where its 8-bit original reads -6.8 % (absolute
     floors on a grey range of 1), and a signed one with negative greys -62 % (the illumination
