@@ -778,7 +778,8 @@ class CrackAnalysis:
             return np.ascontiguousarray(m ^ 1)
 
         d = 2.0 * cv2.distanceTransform(free(self.crack_labels), cv2.DIST_L2, 3)
-        d_all = 2.0 * cv2.distanceTransform(free(self.labels), cv2.DIST_L2, 3)
+        d_all = d if self.crack_labels is self.labels else \
+            2.0 * cv2.distanceTransform(free(self.labels), cv2.DIST_L2, 3)
         region = self.region.mask[::2, ::2]
         img = np.ascontiguousarray(np.asarray(self.smooth, np.float32)[::2, ::2])
         (n0, n1), (f0, f1) = config.BRIGHT_WALLS_NEAR_PX, config.BRIGHT_WALLS_FAR_PX
@@ -789,8 +790,7 @@ class CrackAnalysis:
         wall = (d >= n0) & (d <= n1) & region & (count >= config.BRIGHT_WALLS_MIN_PX)
         if np.count_nonzero(wall) < config.BRIGHT_WALLS_MIN_WALL_PX:
             return float("nan")
-        bg = float(np.median(th.background[::4, ::4][self.region.mask[::4, ::4]]))
-        contrast = bg - float(self.void_level[0])
+        contrast = self._background_grey - float(self.void_level[0])
         if not contrast > 0:
             return float("nan")
         return float(np.median(img[wall] - total[wall] / count[wall])) / contrast
@@ -863,6 +863,15 @@ class CrackAnalysis:
         length = float(_centreline_px(self.cracks).sum()) if not self.cracks.empty else 0.0
         return float(np.count_nonzero(far)) / length if length > 0 else 0.0
 
+    @functools.cached_property
+    def _background_grey(self):
+        """The sample's median local background grey (the ``auto`` threshold's, every 4th
+        pixel of the region; NaN without it)."""
+        th = self._threshold
+        if th is None or th.background is None:
+            return float("nan")
+        return float(np.median(th.background[::4, ::4][self.region.mask[::4, ::4]]))
+
     def _void_gap(self):
         """How far the dark class's median grey (``crack_level``) lies above the void grey
         (``void_level``), as a share of the contrast from it to the sample's median local
@@ -876,8 +885,8 @@ class CrackAnalysis:
         if t.method != "auto" or not (np.isfinite(t.crack_level) and np.isfinite(t.void_level)) \
                 or t.background is None or not t.mask.any():
             return 0.0
-        bg = float(np.median(t.background[::4, ::4][self.region.mask[::4, ::4]]))
-        return float((t.crack_level - t.void_level) / max(bg - t.crack_level, 1e-3))
+        return float((t.crack_level - t.void_level)
+                     / max(self._background_grey - t.crack_level, 1e-3))
 
     def _zone_rejected_share(self):
         """Share of the dark objects' area (pores aside) that the zone and shape rules

@@ -128,8 +128,9 @@ VOID_UNDERCUT_SHARE = 0.05
 #: dark class is one or, opened by REJECT_COMPACT_WIDTH_PX so that thin cracks joined to it fall
 #: away, holds the pixel in one (``semkit.threshold._compact_void``). An opaque grain or organic
 #: lens can be as dark as the void and no crack wide enough to show its core confirms the grey:
-#: the image is flagged. No development, drawn, polyline, line-family or real image is flagged
-#: (held-out 7018, 13019, 13047 and two stress images are; docs/semkit.md, step 3)
+#: the image is flagged. No development, polyline, line-family or real image is flagged; drawn
+#: scene 50006, six stress images and held-out 7018, 13019, 13047, 17042 are (docs/semkit.md,
+#: step 3)
 VOID_COMPACT_ASPECT = 4.0
 VOID_COMPACT_FILL = 0.6
 FLAT_CORE_SIGMAS = 4.0

@@ -24,7 +24,7 @@ import numpy as np
 
 from . import config
 from .errors import InputError
-from .robust import median
+from .robust import group_medians, median
 
 __all__ = ["ThresholdResult", "DarkLevels", "dark_class_levels", "noise_sigma", "coverage",
            "threshold_otsu",
@@ -516,11 +516,8 @@ def _void_components(dark, flat, flat_at, noise, mineral, step=1, components=Non
         # every component holding flat-core pixels has a plateau grey (their median); the
         # darkest of the reference is the void, and any kept component, small ones too,
         # lying more than the band above it is a dark phase's
-        held = np.union1d(ref, np.flatnonzero(cnt > 0))
-        held = held[held > 0]
-        order = np.argsort(lab, kind="stable")
-        starts = np.r_[0, np.cumsum(cnt)[:-1]]
-        plateau = np.array([np.median(flat[order[starts[k]:starts[k] + cnt[k]]]) for k in held])
+        held = np.flatnonzero(cnt[1:]) + 1
+        plateau = group_medians(flat, lab, cnt)[held]
         void = float(plateau[np.isin(held, ref)].min())
         band = max(config.VOID_PLATEAU_BAND * noise,
                    config.VOID_PLATEAU_CONTRAST * (float(mineral) - void))

@@ -186,7 +186,6 @@ def test_unreadable_label_is_not_used_and_is_said():
     assert "unreadable" in row["pixel_size_note"] and not row["valid"]
 
 
-
 def test_a_label_glyph_that_reads_almost_as_another_is_not_used(monkeypatch):
     """OpenCV's Hershey "5" at stroke 2 correlates with the templates' "6" nearly as well as
     with their "5": read anyway, "500 um" becomes "600 um" (pixel size +20 %, every figure in
@@ -221,6 +220,7 @@ def test_a_bar_under_a_sample_clipped_at_the_other_end_is_found():
     b = find_data_bar(img)
     assert b is not None and (b.row0, b.row1) == (384, 430)
     assert read_scale_bar(img, b).pixel_size_um == pytest.approx(1.0)
+
 
 def test_a_noisy_image_of_large_uniform_grains_has_no_data_bar():
     """Development image 6 (``benchmarks/semkit_dev_family.py``): 16-bit, noise 10 grey, grains
