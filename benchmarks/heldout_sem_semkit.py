@@ -13,7 +13,9 @@ tensile / shear area), in physical units with the *true* pixel size, so a scale 
 shows as an error. A row marked ``valid`` that is off by more than 25 % in area or length is
 *confidently wrong*. Nothing in semkit was tuned on these images; the scale-bar margin rule
 (``SCALEBAR_MIN_MARGIN``) and the data-bar edge rule were built after seeing seeds 0-39 read, so
-a fresh range (``--seed0``) is the held-out figure for those.
+a fresh range (``--seed0``) is the held-out figure for those. The OCR's templates include OpenCV's
+Hershey faces, the generator's label font: its bars test the bar finding and the reading of a
+template font (fonts without templates: ``scale_bar_fonts.py``).
 
 Writes ``benchmarks/semkit_results/heldout_sem[_seed<N>].json`` and prints a markdown table.
 

@@ -1,10 +1,14 @@
-"""Benchmark: reading SEM scale-bar labels drawn in fonts the OCR has no templates of.
+"""Benchmark: reading SEM scale-bar labels drawn in fonts the OCR has templates of, and in fonts
+it has none of.
 
 :mod:`semkit.databar` reads a scale bar's label by template correlation against glyphs of the
-DejaVu Sans faces. Labels of the usual lengths (1-2-2.5-3-5 series, µm and mm) are drawn here
-under a 10-px line on a dark and a light bar, in fonts that are *not* templates (Computer Modern
-Sans and Roman, DejaVu Serif, STIX, and OpenCV's Hershey faces at two stroke widths), beside the
-template fonts for reference, at two text heights. Each label is scored as
+DejaVu Sans faces, Aileron (Pillow's default face) and OpenCV's Hershey simplex, duplex, complex
+and plain faces. Labels of the usual lengths (1-2-2.5-3-5 series, µm and mm) are drawn here under
+a 10-px line on a dark and a light bar, at two text heights, in those fonts and in fonts that are
+*not* templates: Computer Modern Sans and Roman, DejaVu Serif, STIX (matplotlib's), Liberation
+Sans, Sans Narrow and Serif (Debian's fonts-liberation, metric twins of Arial and Times; left out
+where absent) and OpenCV's Hershey triplex and complex-small at two stroke widths. Each label is
+scored as
 
 * ``correct`` -- read, and the value is right;
 * ``wrong`` -- read, and the value is wrong (the pixel size, and every figure in µm, would be
@@ -38,9 +42,14 @@ LABELS = [(1, "um"), (2, "um"), (2.5, "um"), (3, "um"), (5, "um"), (10, "um"), (
           (300, "um"), (500, "um"), (1, "mm"), (2, "mm"), (500, "nm"), (200, "nm"), (40, "um"),
           (400, "um"), (60, "um"), (80, "um"), (800, "um"), (150, "um"), (75, "um")]
 TTF = {"cmss10": "unseen", "cmr10": "unseen", "DejaVu Serif": "unseen", "STIXGeneral": "unseen",
-       "DejaVu Sans": "template", "DejaVu Sans Mono": "template"}
+       "Liberation Sans": "unseen", "Liberation Serif": "unseen",
+       "Liberation Sans Narrow": "unseen", "DejaVu Sans": "template",
+       "DejaVu Sans Mono": "template", "Aileron": "template"}
 HERSHEY = {"hershey_simplex": cv2.FONT_HERSHEY_SIMPLEX, "hershey_duplex": cv2.FONT_HERSHEY_DUPLEX,
-           "hershey_plain": cv2.FONT_HERSHEY_PLAIN, "hershey_complex": cv2.FONT_HERSHEY_COMPLEX}
+           "hershey_plain": cv2.FONT_HERSHEY_PLAIN, "hershey_complex": cv2.FONT_HERSHEY_COMPLEX,
+           "hershey_triplex": cv2.FONT_HERSHEY_TRIPLEX,
+           "hershey_complex_small": cv2.FONT_HERSHEY_COMPLEX_SMALL}
+HERSHEY_KIND = {"hershey_triplex": "unseen", "hershey_complex_small": "unseen"}
 
 
 def bar_image(value, unit, font, size, dark, thick=1, rng=None):
@@ -61,9 +70,33 @@ def bar_image(value, unit, font, size, dark, thick=1, rng=None):
         cv2.putText(a, label, (x0, int(0.55 * bh)), HERSHEY[font], scale, ink, thick, cv2.LINE_AA)
         bar = Image.fromarray(a)
     else:
-        f = ImageFont.truetype(font_manager.findfont(font, fallback_to_default=False), size)
-        d.text((x0, 2), label, fill=ink, font=f)
+        d.text((x0, 2), label, fill=ink, font=_font(font, size))
     return np.vstack([sample, np.asarray(bar)]), value * {"nm": 1e-3, "mm": 1e3}.get(unit, 1.0)
+
+
+SYSTEM = {"Liberation Sans": "LiberationSans-Regular.ttf",
+          "Liberation Serif": "LiberationSerif-Regular.ttf",
+          "Liberation Sans Narrow": "LiberationSansNarrow-Regular.ttf"}
+
+
+def _font(name, size):
+    if name == "Aileron":  # Pillow's default face
+        return ImageFont.load_default(size)
+    if name in SYSTEM:  # Debian's fonts-liberation (the Arial / Times metric faces)
+        found = sorted(pathlib.Path("/usr/share/fonts").rglob(SYSTEM[name]))
+        if not found:
+            raise ValueError(name)
+        return ImageFont.truetype(str(found[0]), size)
+    return ImageFont.truetype(font_manager.findfont(name, fallback_to_default=False), size)
+
+
+def _available(name):
+    """False for a system font this machine lacks (the Liberation faces)."""
+    try:
+        _font(name, 12)
+    except ValueError:
+        return False
+    return True
 
 
 def score(font, thick, margin):
@@ -91,8 +124,8 @@ def score(font, thick, margin):
 
 
 def main():
-    fonts = [(f, 1, kind) for f, kind in TTF.items()] + \
-        [(f, t, "unseen") for f in HERSHEY for t in (1, 2)]
+    fonts = [(f, 1, kind) for f, kind in TTF.items() if _available(f)] + \
+        [(f, t, HERSHEY_KIND.get(f, "template")) for f in HERSHEY for t in (1, 2)]
     rows = []
     for font, thick, kind in fonts:
         for margin in (config.SCALEBAR_MIN_MARGIN, 0.0):

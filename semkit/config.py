@@ -326,8 +326,11 @@ DATABAR_MIN_FLAT = 0.3
 DATABAR_TOL_GREY = 6
 #: the three rows next to a bar are sample: at most this share of each at the bar's grey (a round
 #: core's corners fade into the surround; a sample clipped at the other end of the grey scale is
-#: flat, but not at the bar's grey)
+#: flat, but not at the bar's grey) ...
 DATABAR_SAMPLE_FLAT = 0.5
+#: ... or, for a sample clipped at the bar's grey (saturated grains over a white bar), at least
+#: this much less than the bar's median row (a bar's rows are nearly all background)
+DATABAR_SAMPLE_STEP = 0.35
 #: ... and the median bar row is at least this flat (text covers a minority of a bar; a noisy
 #: image of large uniform grains is 40-50 % flat in every row)
 DATABAR_MEDIAN_FLAT = 0.7
@@ -346,8 +349,11 @@ DATABAR_MIN_INK = 0.005
 SCALEBAR_MIN_FRACTION = 0.03
 #: glyphs further apart than this many glyph heights belong to different words
 SCALEBAR_WORD_GAP = 1.2
+#: an ink component of a label wider than this many text heights may be touching glyphs (bold
+#: text at a small size): it is cut where both parts read better than the whole
+SCALEBAR_SPLIT_ASPECT = 0.85
 #: a scale-bar label is used only when every glyph correlates at least this well
-SCALEBAR_MIN_CONFIDENCE = 0.65
+SCALEBAR_MIN_CONFIDENCE = 0.6
 #: ... and only when every glyph's best score leads the best score of any other character by at
 #: least this much (set on the second held-out generator's misread Hershey "5"s, which lead "6"
 #: by 0.002-0.056; the test labels' glyphs lead by 0.24 or more; a Hershey "5" read right can lead

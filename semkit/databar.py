@@ -122,8 +122,10 @@ def find_data_bar(image, *, min_flat=config.DATABAR_MIN_FLAT):
     them this holds in every third of the width. Rows of text or a thick scale bar may
     interrupt the run for at most ``DATABAR_MAX_GAP_ROWS``. Half the rows of the run hold at
     least ``DATABAR_MEDIAN_FLAT`` background. The run must end abruptly (the
-    next rows are textured sample) and carry ink: pixels at the other end of the grey scale
-    (white text on a dark bar, dark text on a light one).
+    next rows are textured sample: at most ``DATABAR_SAMPLE_FLAT`` of them at the bar's grey,
+    or ``DATABAR_SAMPLE_STEP`` less than the bar's median row where the sample is clipped at
+    that grey) and carry ink: pixels at the other end of the grey scale (white text on a dark
+    bar, dark text on a light one).
 
     Parameters
     ----------
@@ -156,62 +158,111 @@ def find_data_bar(image, *, min_flat=config.DATABAR_MIN_FLAT):
         th = thirds[::-1] if side == "bottom" else thirds
         md = mode[::-1] if side == "bottom" else mode
         ref = int(md[0])
-        is_bar = (fl >= min_flat) & (np.abs(md - ref) <= tol)
-        n, gap = 0, 0
-        for k, b in enumerate(is_bar):
-            if b:
-                n, gap = k + 1, 0
-            else:
-                gap += 1
-                if gap > config.DATABAR_MAX_GAP_ROWS:
-                    break
-        if n < max(config.DATABAR_MIN_ROWS, int(config.DATABAR_MIN_FRACTION * h)) or \
-                n > config.DATABAR_MAX_FRACTION * h:
-            continue
-        # an abrupt start: the rows just past the bar are sample, not the bar's grey (a round
-        # core's corners fade; a sample clipped at the other end of the grey scale is flat
-        # too, but not at the bar's grey), and the background spans the width in most bar
-        # rows (a core's corner does not)
+        n_min = max(config.DATABAR_MIN_ROWS, int(config.DATABAR_MIN_FRACTION * h))
+        n = _bar_run((fl >= min_flat) & (np.abs(md - ref) <= tol))
+        if not _is_bar(image, sub, fl, th, n, side, ref, min_flat, n_min):
+            # a sample clipped at the bar's grey continues that run: then the bar's rows are
+            # those far flatter than the sample (within DATABAR_SAMPLE_STEP of the edge rows),
+            # ending in one step of that much (a round core's corner fades row by row)
+            edge = float(np.median(fl[:n_min]))
+            n = _bar_run((fl >= max(min_flat, edge - config.DATABAR_SAMPLE_STEP))
+                         & (np.abs(md - ref) <= tol))
+            step = fl[n - 3:n].max() - fl[n:n + 3].max() if 3 <= n < len(fl) else 0.0
+            if step < config.DATABAR_SAMPLE_STEP or \
+                    not _is_bar(image, sub, fl, th, n, side, ref, min_flat, n_min):
+                continue
         r0, r1 = (h - n, h) if side == "bottom" else (0, n)
-        past = sub[max(r0 - 3, 0):r0] if side == "bottom" else sub[r1:r1 + 3]
-        at_bar = (np.abs(past.astype(np.int16) - ref) <= config.DATABAR_TOL_GREY).mean(
-            axis=1) if past.size else np.zeros(1)
-        if at_bar.max() > config.DATABAR_SAMPLE_FLAT or np.mean(th[:n] >= min_flat) < 0.5:
-            continue
-        # a bar is flat: most of its rows are mostly background, far flatter than the sample
-        # (a noisy image of large uniform grains has rows 40-50 % "flat" everywhere)
-        if np.median(fl[:n]) < config.DATABAR_MEDIAN_FLAT:
-            continue
-        # a bar carries text or a scale bar at the other end of the grey scale
-        rows = _to_u8(image, rows=slice(r0, r1))
-        ink = rows >= 255 - config.DATABAR_INK_GREY if ref < 128 else \
-            rows <= config.DATABAR_INK_GREY
-        if ink.mean() < config.DATABAR_MIN_INK:
-            continue
         return DataBar(r0, r1, side, float(ref))
     return None
 
 
+def _is_bar(image, sub, fl, th, n, side, ref, min_flat, n_min):
+    """Whether the ``n`` rows from the ``side`` edge (flatness ``fl``, ``th`` counted from
+    that edge) are a data bar of background grey ``ref``."""
+    h = len(sub)
+    if n < n_min or n > config.DATABAR_MAX_FRACTION * h:
+        return False
+    # an abrupt start: the rows just past the bar are sample, not the bar's grey (a round
+    # core's corners fade; a sample clipped at the other end of the grey scale is flat
+    # too, but not at the bar's grey), and the background spans the width in most bar
+    # rows (a core's corner does not)
+    r0, r1 = (h - n, h) if side == "bottom" else (0, n)
+    past = sub[max(r0 - 3, 0):r0] if side == "bottom" else sub[r1:r1 + 3]
+    at_bar = (np.abs(past.astype(np.int16) - ref) <= config.DATABAR_TOL_GREY).mean(
+        axis=1) if past.size else np.zeros(1)
+    # a bar is flat: most of its rows are mostly background, far flatter than the sample
+    # (a noisy image of large uniform grains has rows 40-50 % "flat" everywhere)
+    bar_flat = float(np.median(fl[:n]))
+    if bar_flat < config.DATABAR_MEDIAN_FLAT:
+        return False
+    if at_bar.max() > max(config.DATABAR_SAMPLE_FLAT, bar_flat - config.DATABAR_SAMPLE_STEP) \
+            or np.mean(th[:n] >= min_flat) < 0.5:
+        return False
+    # a bar carries text or a scale bar at the other end of the grey scale
+    rows = _to_u8(image, rows=slice(r0, r1))
+    ink = rows >= 255 - config.DATABAR_INK_GREY if ref < 128 else \
+        rows <= config.DATABAR_INK_GREY
+    return ink.mean() >= config.DATABAR_MIN_INK
+
+
+def _bar_run(is_bar):
+    """Rows from the edge up to the last bar row before a gap of more than
+    ``DATABAR_MAX_GAP_ROWS``."""
+    n, gap = 0, 0
+    for k, b in enumerate(is_bar):
+        if b:
+            n, gap = k + 1, 0
+        else:
+            gap += 1
+            if gap > config.DATABAR_MAX_GAP_ROWS:
+                break
+    return n
+
+
+#: OpenCV's Hershey faces (what scripts and many acquisition programs write with
+#: ``cv2.putText``), rendered at a 48-px cap height with these stroke widths (px): from a
+#: 1-px stroke on a 30-px label to a 2-px stroke on a 12-px one
+_HERSHEY_STROKES = (2, 4, 7)
+
+
 @functools.lru_cache(maxsize=1)
 def _templates():
-    """Normalised binary glyphs of :data:`_GLYPHS` in the DejaVu fonts of matplotlib."""
+    """Normalised binary glyphs of :data:`_GLYPHS`: the DejaVu Sans faces of matplotlib,
+    Aileron (Pillow's default face, a Helvetica-like sans) and OpenCV's Hershey faces.
+
+    Returns the character, normalised glyph, aspect and face name of every template."""
     import os
 
+    import cv2
     import matplotlib
     from PIL import Image, ImageDraw, ImageFont
     base = os.path.join(os.path.dirname(matplotlib.__file__), "mpl-data", "fonts", "ttf")
-    names, vecs, aspects = [], [], []
-    for fname in ("DejaVuSans.ttf", "DejaVuSans-Bold.ttf", "DejaVuSansMono.ttf"):
-        font = ImageFont.truetype(os.path.join(base, fname), 48)
-        for ch in _GLYPHS:
+    fonts = [(ImageFont.truetype(os.path.join(base, f), 48), _GLYPHS)
+             for f in ("DejaVuSans.ttf", "DejaVuSans-Bold.ttf", "DejaVuSansMono.ttf")]
+    fonts.append((ImageFont.load_default(48), _GLYPHS.replace("µ", "")))  # Aileron: no "µ"
+    names, vecs, aspects, faces = [], [], [], []
+
+    def add(ch, g, face):
+        v, asp = _normalise(g)
+        names.append(ch)
+        vecs.append(v)
+        aspects.append(asp)
+        faces.append(face)
+
+    for font, chars in fonts:
+        for ch in chars:
             im = Image.new("L", (80, 90), 0)
             ImageDraw.Draw(im).text((10, 5), ch, fill=255, font=font)
-            g = np.asarray(im) > 127
-            v, asp = _normalise(g)
-            names.append(ch)
-            vecs.append(v)
-            aspects.append(asp)
-    return names, np.array(vecs), np.array(aspects)
+            add(ch, np.asarray(im) > 127, " ".join(font.getname()))
+    for face, name in ((cv2.FONT_HERSHEY_SIMPLEX, "simplex"), (cv2.FONT_HERSHEY_DUPLEX, "duplex"),
+                       (cv2.FONT_HERSHEY_COMPLEX, "complex"), (cv2.FONT_HERSHEY_PLAIN, "plain")):
+        for thick in _HERSHEY_STROKES:
+            scale = cv2.getFontScaleFromHeight(face, 48, thick)
+            for ch in _GLYPHS.replace("µ", ""):  # Hershey has no "µ"
+                im = np.zeros((110, 90), np.uint8)
+                cv2.putText(im, ch, (15, 75), face, scale, 255, thick, cv2.LINE_AA)
+                add(ch, im > 127, f"Hershey {name} {thick}")
+    return names, np.array(vecs), np.array(aspects), faces
 
 
 def _normalise(glyph):
@@ -253,6 +304,48 @@ def _words(glyphs):
     return words
 
 
+def _score(g):
+    """Template scores of a binary glyph: the best character, its correlation, and its lead
+    over the best other character with that character's name."""
+    names, vecs, aspects, _ = _templates()
+    v, asp = _normalise(g)
+    score = vecs @ v - 0.5 * np.abs(np.log(aspects / asp))
+    k = int(np.argmax(score))
+    other = np.where(np.asarray(names) == names[k], -np.inf, score)
+    j = int(np.argmax(other))
+    return names[k], float(vecs[k] @ v), float(score[k] - other[j]), names[j]
+
+
+def _split(box, g, height, depth=0):
+    """Touching glyphs of one ink component (bold text on a small label): a box wider than
+    ``SCALEBAR_SPLIT_ASPECT`` of the text height is cut at its faintest column in the middle
+    two fifths (of its three faintest there, the one whose parts read best) when both parts
+    correlate with a template better than the whole; repeated on the parts. Returns a list of
+    ``(box, glyph)``."""
+    r0, c0, r1, c1 = box
+    w = c1 - c0
+    if depth > 3 or w <= config.SCALEBAR_SPLIT_ASPECT * height:
+        return [(box, g)]
+    cols = g.sum(axis=0)
+    lo, hi = int(0.3 * w), int(np.ceil(0.7 * w))
+    best, parts = _score(g)[1], None
+    for cut in lo + np.argsort(cols[lo:hi], kind="stable")[:3]:  # the faintest columns
+        cand = []
+        for a, b in ((0, cut), (cut + (cols[cut] == 0), w)):
+            rows = np.flatnonzero(g[:, a:b].any(axis=1))
+            if not rows.size:
+                break
+            cand.append(((r0 + rows[0], c0 + a, r0 + rows[-1] + 1, c0 + b),
+                         g[rows[0]:rows[-1] + 1, a:b]))
+        else:
+            worst = min(_score(p[1])[1] for p in cand)
+            if worst > best:
+                best, parts = worst, cand
+    if parts is None:
+        return [(box, g)]
+    return [q for p in parts for q in _split(*p, height, depth + 1)]
+
+
 def _read_glyphs(boxes, height):
     """OCR of glyph boxes (sorted by x).
 
@@ -260,28 +353,29 @@ def _read_glyphs(boxes, height):
     a glyph's best score over the best score of any other character, with that glyph and its
     runner-up (``"6/5"``; ``""`` when no glyph was scored).
     """
-    names, vecs, aspects = _templates()
-    names_arr = np.asarray(names)
     text, conf, margin, which, prev_x1 = "", 1.0, 1.0, "", None
-    for (r0, c0, r1, c1), g in boxes:
+    for (r0, c0, r1, c1), g in (q for b in boxes for q in _split(*b, height)):
         h = r1 - r0
         if h < 0.35 * height and (c1 - c0) < 0.5 * height:
             ch, c = ".", 1.0
         else:
-            v, asp = _normalise(g)
-            score = vecs @ v - 0.5 * np.abs(np.log(aspects / asp))
-            k = int(np.argmax(score))
-            ch, c = names[k], float(vecs[k] @ v)
-            other = np.where(names_arr == ch, -np.inf, score)
-            j = int(np.argmax(other))
-            if score[k] - other[j] < margin:
-                margin, which = float(score[k] - other[j]), f"{ch}/{names[j]}"
+            ch, c, lead, alt = _score(g)
+            if lead < margin:
+                margin, which = lead, f"{ch}/{alt}"
         if prev_x1 is not None and c0 - prev_x1 > 0.45 * height:
             text += " "
         text += ch
         conf = min(conf, c)
         prev_x1 = c1
     return text, conf, margin, which
+
+
+def _is_dot(g, other):
+    """Whether glyph box ``g`` is a decimal point beside ``other``: at most 0.4 of its height
+    tall and half as wide, on its baseline (a dot 1 px from a digit is not a broken stroke)."""
+    h = other[2] - other[0]
+    return (g[2] - g[0] <= 0.4 * h and g[3] - g[1] <= 0.5 * h
+            and abs(g[2] - other[2]) <= max(1.0, 0.15 * h))
 
 
 def read_scale_bar(image, bar):
@@ -331,7 +425,8 @@ def read_scale_bar(image, bar):
         p = glyphs[-1] if glyphs else None
         if p is not None and gx - p[3] <= 1 and min(p[2], g[2]) - max(p[0], g[0]) > \
                 0.5 * min(p[2] - p[0], gh) and \
-                gx + gw - p[1] <= 1.5 * (max(p[2], gy + gh) - min(p[0], gy)):
+                gx + gw - p[1] <= 1.5 * (max(p[2], gy + gh) - min(p[0], gy)) and \
+                not (gx >= p[3] and (_is_dot(g, p) or _is_dot(p, g))):
             glyphs[-1] = (min(p[0], gy), p[1], max(p[2], gy + gh), max(p[3], gx + gw),
                           p[4] + (j,))
         else:

@@ -7,13 +7,14 @@ import pytest
 from matplotlib import font_manager
 from PIL import Image, ImageDraw, ImageFont
 
+from semkit import databar
 from semkit.analysis import analyse_image
 from semkit.databar import find_data_bar, read_scale_bar
 from semkit.roi import find_sample_region
 from semkit.synth import make_sem_image
 
-# label fonts: Computer Modern Sans and OpenCV's Hershey simplex are not among the OCR's
-# templates (the DejaVu Sans faces); only DejaVu Sans draws "µ" here, so "µm" labels use it
+# label fonts: Computer Modern Sans is not among the OCR's templates (the DejaVu Sans faces,
+# Aileron and OpenCV's Hershey faces); only DejaVu Sans draws "µ" here, so "µm" labels use it
 FONTS = {"cmss": font_manager.findfont("cmss10"), "dejavu": font_manager.findfont("DejaVu Sans")}
 
 
@@ -186,10 +187,22 @@ def test_unreadable_label_is_not_used_and_is_said():
     assert "unreadable" in row["pixel_size_note"] and not row["valid"]
 
 
+_ALL_TEMPLATES = databar._templates
+
+
+def _dejavu_only():
+    """The OCR's templates without the Hershey and Aileron faces: OpenCV's Hershey font is then
+    a font unlike the templates."""
+    names, vecs, aspects, faces = _ALL_TEMPLATES()
+    keep = [i for i, f in enumerate(faces) if f.startswith("DejaVu")]
+    return [names[i] for i in keep], vecs[keep], aspects[keep], [faces[i] for i in keep]
+
+
 def test_a_label_glyph_that_reads_almost_as_another_is_not_used(monkeypatch):
-    """OpenCV's Hershey "5" at stroke 2 correlates with the templates' "6" nearly as well as
-    with their "5": read anyway, "500 um" becomes "600 um" (pixel size +20 %, every figure in
-    um wrong while looking fine). The label is not used and the note names the two glyphs."""
+    """In a font unlike the templates (OpenCV's Hershey "5" at stroke 2 against the DejaVu
+    faces alone) a "5" correlates with "6" nearly as well as with "5": read anyway, "500 um"
+    becomes "600 um" (pixel size +20 %, every figure in um wrong while looking fine). The label
+    is not used and the note names the two glyphs."""
     from semkit import config
     s = make_sem_image((384, 512), n_cracks=4, seed=9)
     bar = np.zeros((60, 512), np.uint8)
@@ -198,12 +211,37 @@ def test_a_label_glyph_that_reads_almost_as_another_is_not_used(monkeypatch):
     img = np.vstack([s.image, bar])
     with monkeypatch.context() as m:
         m.setattr(config, "SCALEBAR_MIN_MARGIN", 0.0)
+        assert read_scale_bar(img, find_data_bar(img)).length_um == 500.0   # Hershey templates
+        m.setattr(databar, "_templates", _dejavu_only)
         assert read_scale_bar(img, find_data_bar(img)).length_um == 600.0   # the misreading
+    monkeypatch.setattr(databar, "_templates", _dejavu_only)
     sb = read_scale_bar(img, find_data_bar(img))
     assert np.isnan(sb.length_um) and sb.ambiguous == "6/5" and sb.margin < 0.01
     row = analyse_image(img, pixel_size_um=1.0, pixel_size_source="default").summary()
     assert row["pixel_size_source"] == "default" and not row["valid"]
     assert "'6' reads almost as well as '5'" in row["pixel_size_note"]
+
+
+@pytest.mark.parametrize("face,thick,label,um", [
+    (cv2.FONT_HERSHEY_DUPLEX, 2, "40 um", 40.0),      # "4" and "0" touch
+    (cv2.FONT_HERSHEY_COMPLEX, 2, "2.5 um", 2.5),    # the point 1 px from the "2"
+    (cv2.FONT_HERSHEY_SIMPLEX, 1, "250 um", 250.0),
+    (cv2.FONT_HERSHEY_PLAIN, 2, "20 um", 20.0),       # "2" and "0" touch
+])
+def test_bold_small_labels_with_touching_glyphs_are_read(face, thick, label, um):
+    """OpenCV's faces at a stroke of 1-2 px on a 16-26 px label: glyphs that touch are cut
+    apart where both parts read better than the whole, and a decimal point touching its digit
+    stays a point (read as one glyph, "2.5" was "1 5": a confident +500 %)."""
+    s = make_sem_image((384, 640), n_cracks=4, seed=9)
+    for height in (16, 26):
+        bar = np.zeros((max(int(2.6 * height), 40), 640), np.uint8)
+        scale = cv2.getFontScaleFromHeight(face, height, thick)
+        cv2.putText(bar, label, (380, int(0.55 * len(bar))), face, scale, 255, thick,
+                    cv2.LINE_AA)
+        y = int(0.72 * len(bar))
+        cv2.rectangle(bar, (380, y), (380 + 199, y + 3), 255, -1)
+        sb = read_scale_bar(*(lambda im: (im, find_data_bar(im)))(np.vstack([s.image, bar])))
+        assert sb.length_um == um and sb.length_px == 200, (height, sb.text)
 
 
 def test_a_bar_under_a_sample_clipped_at_the_other_end_is_found():
