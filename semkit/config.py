@@ -352,12 +352,14 @@ SCALEBAR_WORD_GAP = 1.2
 #: an ink component of a label wider than this many text heights may be touching glyphs (bold
 #: text at a small size): it is cut where both parts read better than the whole
 SCALEBAR_SPLIT_ASPECT = 0.85
-#: a scale-bar label is used only when every glyph correlates at least this well
+#: a scale-bar label is used only when every glyph correlates at least this well (Liberation
+#: Sans, an Arial twin without templates, draws an 11-px "0" that correlates 0.61)
 SCALEBAR_MIN_CONFIDENCE = 0.6
 #: ... and only when every glyph's best score leads the best score of any other character by at
-#: least this much (set on the second held-out generator's misread Hershey "5"s, which lead "6"
-#: by 0.002-0.056; the test labels' glyphs lead by 0.24 or more; a Hershey "5" read right can lead
-#: by as little as 0.01-0.04 and is then given up, unread and flagged)
+#: least this much (set, when the templates were DejaVu only, on the second held-out generator's
+#: misread Hershey "5"s, which led "6" by 0.002-0.056; with the Hershey templates those read
+#: right; over the fonts without templates the rule gives up 24 right readings and no reading
+#: is wrong either way: benchmarks/scale_bar_fonts.py)
 SCALEBAR_MIN_MARGIN = 0.08
 #: a given pixel size and the scale bar's disagreeing by more than this is noted
 SCALEBAR_AGREE_FRACTION = 0.05

@@ -9,12 +9,14 @@ above it never looks like that (texture and noise), and neither do the black cor
 core, whose middle third is sample.
 
 :func:`read_scale_bar` finds the longest solid horizontal line in the band and reads the label
-next to it with a small template OCR (glyphs rendered from the DejaVu fonts shipped with
-matplotlib, compared by normalised correlation on size-normalised binary glyphs): digits,
-``.``, and the units ``nm``, ``µm`` (or ``um``), ``mm``. The pixel size is the written length
-over the line's length in pixels. A label read with low glyph confidence is not used, nor one
-with a glyph that reads almost as well as another character (a "5" drawn in a font unlike the
-templates can read as "6": a confident misreading would scale every figure).
+next to it with a small template OCR (glyphs rendered from the DejaVu Sans faces shipped with
+matplotlib, Pillow's default face Aileron and OpenCV's Hershey faces, compared by normalised
+correlation on size-normalised binary glyphs; touching glyphs of bold labels cut apart where the
+parts read better): digits, ``.``, and the units ``nm``, ``µm`` (or ``um``), ``mm``. The pixel
+size is the written length over the line's length in pixels. A label read with low glyph
+confidence is not used, nor one with a glyph that reads almost as well as another character (a
+"5" drawn in a font unlike the templates can read as "6": a confident misreading would scale
+every figure).
 """
 from __future__ import annotations
 
