@@ -260,6 +260,25 @@ def test_a_bar_under_a_sample_clipped_at_the_other_end_is_found():
     assert read_scale_bar(img, b).pixel_size_um == pytest.approx(1.0)
 
 
+def test_a_white_bar_under_grains_clipped_white_is_found():
+    """A white bar under a sample whose grains are clipped at the bar's own grey: the sample
+    rows are half at 255, so the run of flat rows goes on into the sample and the bar was not
+    found (second held-out generator, seed 2: its scale bar unread, every um figure at the
+    default pixel size). The bar is the rows far flatter than the sample, ending in one step."""
+    s = make_sem_image((384, 512), n_cracks=4, seed=9)
+    img = s.image.copy()
+    img[(np.arange(384)[:, None] // 30 + np.arange(512) // 40) % 2 == 0] = 255  # clipped grains
+    bar = np.full((46, 512), 255, np.uint8)
+    cv2.putText(bar, "100 um", (300, 22), cv2.FONT_HERSHEY_SIMPLEX, 0.6, 0, 1, cv2.LINE_AA)
+    cv2.rectangle(bar, (300, 32), (399, 35), 0, -1)
+    img = np.vstack([img, bar])
+    b = find_data_bar(img)
+    assert b is not None and (b.row0, b.row1, b.side) == (384, 430, "bottom")
+    assert read_scale_bar(img, b).pixel_size_um == pytest.approx(1.0)
+    row = analyse_image(img, pixel_size_um=2.0, pixel_size_source="default").summary()
+    assert row["pixel_size_source"] == "scale_bar" and row["data_bar_rows"] == "384-430"
+
+
 def test_a_noisy_image_of_large_uniform_grains_has_no_data_bar():
     """Development image 6 (``benchmarks/semkit_dev_family.py``): 16-bit, noise 10 grey, grains
     of nearly one grey along the bottom, dark cracks as "ink". Every row is 40-50 % within the
