@@ -328,8 +328,10 @@ DATABAR_TOL_GREY = 6
 #: core's corners fade into the surround; a sample clipped at the other end of the grey scale is
 #: flat, but not at the bar's grey) ...
 DATABAR_SAMPLE_FLAT = 0.5
-#: ... or, for a sample clipped at the bar's grey (saturated grains over a white bar), at least
-#: this much less than the bar's median row (a bar's rows are nearly all background)
+#: ... unless the sample is clipped at the bar's grey (saturated grains over a white bar) and the
+#: run of flat rows goes on into it: then the bar is the rows within this much of the edge rows'
+#: flatness, ending in one step of this much, and the rows past it hold at least this much less
+#: than the bar's median row at its grey (a bar's rows are nearly all background)
 DATABAR_SAMPLE_STEP = 0.35
 #: ... and the median bar row is at least this flat (text covers a minority of a bar; a noisy
 #: image of large uniform grains is 40-50 % flat in every row)

@@ -171,16 +171,18 @@ def find_data_bar(image, *, min_flat=config.DATABAR_MIN_FLAT):
                          & (np.abs(md - ref) <= tol))
             step = fl[n - 3:n].max() - fl[n:n + 3].max() if 3 <= n < len(fl) else 0.0
             if step < config.DATABAR_SAMPLE_STEP or \
-                    not _is_bar(image, sub, fl, th, n, side, ref, min_flat, n_min):
+                    not _is_bar(image, sub, fl, th, n, side, ref, min_flat, n_min, clipped=True):
                 continue
         r0, r1 = (h - n, h) if side == "bottom" else (0, n)
         return DataBar(r0, r1, side, float(ref))
     return None
 
 
-def _is_bar(image, sub, fl, th, n, side, ref, min_flat, n_min):
+def _is_bar(image, sub, fl, th, n, side, ref, min_flat, n_min, clipped=False):
     """Whether the ``n`` rows from the ``side`` edge (flatness ``fl``, ``th`` counted from
-    that edge) are a data bar of background grey ``ref``."""
+    that edge) are a data bar of background grey ``ref``; ``clipped``: the sample past it may be
+    clipped at that grey (then its rows may hold up to ``DATABAR_SAMPLE_STEP`` less than the
+    bar's median row at it, the step :func:`find_data_bar` has checked)."""
     h = len(sub)
     if n < n_min or n > config.DATABAR_MAX_FRACTION * h:
         return False
@@ -197,8 +199,9 @@ def _is_bar(image, sub, fl, th, n, side, ref, min_flat, n_min):
     bar_flat = float(np.median(fl[:n]))
     if bar_flat < config.DATABAR_MEDIAN_FLAT:
         return False
-    if at_bar.max() > max(config.DATABAR_SAMPLE_FLAT, bar_flat - config.DATABAR_SAMPLE_STEP) \
-            or np.mean(th[:n] >= min_flat) < 0.5:
+    past_max = max(config.DATABAR_SAMPLE_FLAT, bar_flat - config.DATABAR_SAMPLE_STEP) \
+        if clipped else config.DATABAR_SAMPLE_FLAT
+    if at_bar.max() > past_max or np.mean(th[:n] >= min_flat) < 0.5:
         return False
     # a bar carries text or a scale bar at the other end of the grey scale
     rows = _to_u8(image, rows=slice(r0, r1))
