@@ -151,6 +151,11 @@ def _confidence(out, c, area, mixed):
         if "type_post_ok" in c.columns else np.ones(len(c), bool)
     if "type_source" in c.columns:
         trusted = trusted | (c["type_source"] == "user").to_numpy()
+    sd = np.nan_to_num(c["type_shift_sd"].to_numpy(float)) if "type_shift_sd" in c \
+        else np.zeros(len(c))
+
+    def shift_sd(sel):  # the image's typing model's spread of a common lean
+        return float(sd[sel].max()) if sel.any() else 0.0
     cols = {k: [] for k in ("P_low", "P_high", "P_note")}
     for img, status in zip(out["image"], out["P_status"]):
         sel = (c["image"] == img).to_numpy()
@@ -159,7 +164,7 @@ def _confidence(out, c, area, mixed):
                          mixed=mixed, notes=c["type_note"].astype(str).to_numpy()[sel]
                          if "type_note" in c else None,
                          tensile_fraction=c["tensile_fraction"].to_numpy()[sel]
-                         if "tensile_fraction" in c else None)
+                         if "tensile_fraction" in c else None, shift_sd=shift_sd(sel))
         cols["P_low"].append(r["P_low"])
         cols["P_high"].append(r["P_high"])
         cols["P_note"].append(r["note"])

@@ -13,9 +13,13 @@ Two stages, both small and JSON-able (no pickle):
    (:data:`PRODUCTS`). Each group is weighted by the square root of its labelled area.
 
 The stage-2 scores are divided by a temperature fitted on a separate calibration set (minimum
-log loss), so the probabilities are calibrated. The model stores, per stage-2 feature, the
-range of the training groups (0.5-99.5 % quantiles widened by ``RANGE_PAD`` of their span): a
-group outside it is reported as untyped (``type_post_ok = False``, the feature named).
+log loss), so the probabilities are calibrated. The built-in model also records
+``image_shift_sd``: how far the tensile-versus-shear log-odds of a whole image lean one way
+on renderings unlike its training ones (:func:`fit_image_shift`), which widens the P band of
+:mod:`semkit.damage_confidence`; a model without it (a user's own) gives independent draws.
+The model stores, per stage-2 feature, the range of the training groups (0.5-99.5 % quantiles
+widened by ``RANGE_PAD`` of their span): a group outside it is reported as untyped
+(``type_post_ok = False``, the feature named).
 
 :func:`train_post` fits it (``semkit classify --train``); :func:`save_model` /
 :func:`load_model` write and read the JSON form.
@@ -30,9 +34,10 @@ import numpy as np
 from ..errors import InputError
 from .morphology import FEATURE_NAMES, LOCAL_NAMES, crack_morphology, group_quantile
 
-__all__ = ["DEFAULT_POST_MODEL", "train_post", "fit_post", "calibrate", "save_model",
-           "load_model", "check_model", "type_probabilities", "group_design", "out_of_range",
-           "image_samples", "TYPE_CODES", "TYPES", "PRODUCTS", "STAGE2_NAMES", "VERSION"]
+__all__ = ["DEFAULT_POST_MODEL", "train_post", "fit_post", "calibrate", "fit_image_shift",
+           "shift_sd_mle", "save_model", "load_model", "check_model", "type_probabilities",
+           "group_design", "out_of_range", "image_samples", "TYPE_CODES", "TYPES", "PRODUCTS",
+           "STAGE2_NAMES", "VERSION"]
 
 VERSION = 3
 TYPES = ("tensile", "shear", "mixed")
@@ -261,6 +266,93 @@ def calibrate(model, samples):
     return model
 
 
+#: Gauss-Hermite nodes of the marginal likelihood in :func:`fit_image_shift`.
+_SHIFT_NODES = 41
+#: the tensile-versus-shear direction of an image's log-odds shift (tensile, shear, mixed).
+SHIFT_DIRECTION = (0.5, -0.5, 0.0)
+
+
+def _shift_nll(sd, per_image):
+    """Negative log marginal likelihood of the images' group labels when each image's
+    scores are shifted by ``sd * z * SHIFT_DIRECTION``, z ~ N(0, 1)."""
+    x, w = np.polynomial.hermite_e.hermegauss(_SHIFT_NODES)
+    logw = np.log(w / w.sum())
+    u = np.asarray(SHIFT_DIRECTION)
+    total = 0.0
+    for s, y in per_image:
+        z = s[None, :, :] + (sd * x)[:, None, None] * u          # nodes x groups x types
+        z = z - z.max(axis=2, keepdims=True)
+        lp = z - np.log(np.exp(z).sum(axis=2, keepdims=True))
+        ll = lp[:, np.arange(len(y)), y].sum(axis=1) + logw
+        m = ll.max()
+        total += m + np.log(np.exp(ll - m).sum())
+    return -total
+
+
+def fit_image_shift(samples, model, *, max_sd=6.0):
+    """Spread of the per-image bias of the typing: a random-effects fit on labelled images.
+
+    Every image's calibrated stage-2 scores are shifted along :data:`SHIFT_DIRECTION` (the
+    tensile-versus-shear log-odds) by ``sd * z_i`` with one ``z_i ~ N(0, 1)`` per image, and
+    ``sd`` is chosen by maximum marginal likelihood of the images' group labels (``z_i``
+    integrated out by Gauss-Hermite quadrature). 0 means the groups' errors are independent
+    between images as well as within; images from another rendering than the training one
+    typically share a lean, which independent draws of the groups' types do not cover.
+
+    Parameters
+    ----------
+    samples : list of dict
+        One per image, from :func:`image_samples` (images with no labelled group are skipped).
+    model : dict
+        The post-test model whose probabilities are examined.
+    max_sd : float
+        Upper end of the search.
+
+    Returns
+    -------
+    result : dict
+        ``sd`` (the estimate), ``sd_low, sd_high`` (its 95 % profile-likelihood interval),
+        ``n_images``, ``n_groups``.
+    """
+    per_image = []
+    for smp in samples:
+        D = group_design(smp["F"], smp["local"], model)[smp["group_ids"]]
+        if len(D):
+            per_image.append((_scores(D, model) / float(model["temperature"]),
+                              np.asarray(smp["group_y"], int)))
+    return shift_sd_mle(per_image, max_sd=max_sd)
+
+
+def shift_sd_mle(per_image, *, max_sd=6.0):
+    """Maximum marginal likelihood ``sd`` of :func:`fit_image_shift` from scores and labels.
+
+    Parameters
+    ----------
+    per_image : list of (scores, labels)
+        Per image: ``(n, 3)`` calibrated log-odds scores of its groups (tensile, shear,
+        mixed) and their ``(n,)`` true type indices.
+    max_sd : float
+        Upper end of the search.
+
+    Returns
+    -------
+    result : dict
+        As :func:`fit_image_shift`.
+    """
+    from scipy.optimize import minimize_scalar
+    per_image = [(np.asarray(s, float).reshape(-1, 3), np.asarray(y, int))
+                 for s, y in per_image if len(y)]
+    if not per_image:
+        raise InputError("fit_image_shift: no labelled crack groups in the samples")
+    r = minimize_scalar(lambda v: _shift_nll(v, per_image), bounds=(0.0, max_sd),
+                        method="bounded", options={"xatol": 1e-3})
+    grid = np.linspace(0.0, max_sd, 121)
+    inside = grid[[_shift_nll(v, per_image) <= r.fun + 1.92 for v in grid]]
+    return dict(sd=float(r.x), sd_low=float(min(inside.min(), r.x)),
+                sd_high=float(max(inside.max(), r.x)), n_images=len(per_image),
+                n_groups=int(sum(len(y) for _, y in per_image)))
+
+
 def train_post(samples, *, seed=None, calibration=None):
     """Fit the post-test model from labelled cracks.
 
@@ -322,6 +414,8 @@ def check_model(model, where="crack model"):
                          f"expected (3, {k})")
     if not float(model["temperature"]) > 0:
         raise InputError(f"{where}: temperature must be > 0")
+    if not float(model.get("image_shift_sd", 0.0)) >= 0:
+        raise InputError(f"{where}: image_shift_sd must be >= 0")
     return model
 
 

@@ -43,7 +43,7 @@ PIECE_UNTRUSTED_MAX = 0.2
 #: columns of the table of :func:`classify_post`, after ``crack_id``.
 POST_COLUMNS = ("type_post", "confidence", "p_tensile", "p_shear", "p_mixed", "type_post_ok",
                 "type_note", "frac_tensile", "frac_shear", "frac_mixed", "tensile_fraction",
-                "group_id", "p_mean", *FEATURE_NAMES)
+                "type_shift_sd", "group_id", "p_mean", *FEATURE_NAMES)
 
 
 def classify_post(crack_labels, *, image=None, skeleton=None, background=None,
@@ -76,7 +76,9 @@ def classify_post(crack_labels, *, image=None, skeleton=None, background=None,
         range), its pixel shares of the pieces' types, with ``type_post`` the largest and the
         probabilities the pieces' pixel-weighted mean; ``tensile_fraction`` = p_tensile /
         (p_tensile + p_shear) (how a mixed crack splits with
-        ``image_damage(mixed="split")``); the features are the group's.
+        ``image_damage(mixed="split")``); ``type_shift_sd`` the model's ``image_shift_sd``
+        (the spread of an image's common tensile-versus-shear lean, which widens the P band;
+        0 when the model has none); the features are the group's.
     type_image : (M, N) ndarray of int8
         0 none, 1 tensile, 2 shear, 3 mixed.
 
@@ -152,6 +154,7 @@ def _post_table(crack_labels, *, image=None, skeleton=None, background=None, cra
         "p_mixed": pg[:, 2], "type_post_ok": ok, "type_note": note_obj.astype(str),
         "frac_tensile": onehot[:, 0], "frac_shear": onehot[:, 1], "frac_mixed": onehot[:, 2],
         "tensile_fraction": pg[:, 0] / np.maximum(pg[:, 0] + pg[:, 1], 1e-12),
+        "type_shift_sd": np.full(len(ids), float(model.get("image_shift_sd", 0.0))),
         "group_id": group_of[ids].astype(int), "p_mean": D[at, len(FEATURE_NAMES)]}
     cols.update({name: Fg[at, j] for j, name in enumerate(FEATURE_NAMES)})
     return pd.DataFrame(cols), code

@@ -203,7 +203,8 @@ def test_p_of_a_dense_image_typed_in_pieces():
     p_true = (tp == 1).sum() / (tp == 2).sum()
     row = analyse_image(s.image, pixel_size_um=s.pixel_size_um, stage="failure").summary()
     assert abs(row["P"] / p_true - 1) < 0.25, (row["P"], p_true)
-    assert row["P_low"] <= p_true <= row["P_high"], (row["P_low"], p_true, row["P_high"])
+    high = np.nan_to_num(row["P_high"], nan=np.inf)   # NaN: some draws leave no shear, open
+    assert row["P_low"] <= p_true <= high, (row["P_low"], p_true, row["P_high"])
 
 
 def _groups(seeds):

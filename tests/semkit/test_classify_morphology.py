@@ -95,6 +95,52 @@ def test_image_damage_reports_the_band_and_low_confidence():
     assert image_damage(sure).iloc[0].P_status == "ok"
     users = c.assign(type_source="user")
     assert image_damage(users).iloc[0].P_status == "ok"    # user types are certain
+    # a common lean of the model that typed them (type_shift_sd) moves uncertain groups, not
+    # sure ones nor user types
+    assert image_damage(sure.assign(type_shift_sd=2.0)).iloc[0].P_status == "ok"
+    assert image_damage(users.assign(type_shift_sd=2.0)).iloc[0].P_status == "ok"
+
+
+def test_a_common_lean_widens_the_band_of_many_groups():
+    area, prob = [10.0] * 40, [[0.9, 0.1, 0.0]] * 20 + [[0.1, 0.9, 0.0]] * 20
+    alone = p_confidence(area, prob)
+    lean = p_confidence(area, prob, shift_sd=2.0)
+    # independent draws average out over 40 groups; a lean shared by all of them does not
+    assert not alone["low_confidence"] and alone["P_high"] / alone["P_low"] < 1.6
+    assert lean["low_confidence"] and lean["P_high"] / lean["P_low"] > 4
+    # the band under a lean of +-1.28 sd (its 10-90 % quantiles) holds the P of that lean
+    for d in (-1.28 * 2.0, 1.28 * 2.0):
+        w = np.asarray(prob) * np.exp(d * np.array([0.5, -0.5, 0.0]))
+        w /= w.sum(axis=1, keepdims=True)
+        p_lean = (w[:, 0] * 10).sum() / (w[:, 1] * 10).sum()
+        assert lean["P_low"] * 0.8 <= p_lean <= lean["P_high"] * 1.25
+    with pytest.raises(InputError, match="shift_sd"):
+        p_confidence(area, prob, shift_sd=-1.0)
+
+
+@pytest.mark.parametrize("sd", [0.0, 1.5])
+def test_image_shift_is_recovered_from_labels_drawn_with_a_known_lean(sd):
+    from semkit.classify.model import SHIFT_DIRECTION, shift_sd_mle
+    rng = np.random.default_rng(1)
+    per_image = []
+    for _ in range(200):
+        s = rng.normal(0.0, 2.0, (8, 3))
+        z = s + sd * rng.standard_normal() * np.asarray(SHIFT_DIRECTION)
+        p = np.exp(z - z.max(axis=1, keepdims=True))
+        p /= p.sum(axis=1, keepdims=True)
+        per_image.append((s, (rng.random((8, 1)) > p.cumsum(axis=1)[:, :-1]).sum(axis=1)))
+    r = shift_sd_mle(per_image)
+    assert abs(r["sd"] - sd) < 0.3 and r["sd_low"] <= sd <= r["sd_high"]
+
+
+def test_the_built_in_model_passes_its_lean_to_the_crack_table():
+    from semkit.classify import classify_post
+    sd = DEFAULT_POST_MODEL["image_shift_sd"]
+    assert 1.0 < sd < 3.0           # fitted on held-out renderings (benchmarks/typing_model.py)
+    lab = np.zeros((40, 80), np.int32)
+    lab[18:24, 5:75] = 1
+    t, _ = classify_post(lab)
+    assert t["type_shift_sd"].tolist() == [sd]
 
 
 def test_load_model_refuses_an_old_model(tmp_path):
