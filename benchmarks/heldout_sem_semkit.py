@@ -102,12 +102,15 @@ def main(argv=None):
             "unreadable")).sum()),
         n_bar_not_found=int((bar & ~_given(m.data_bar_rows)).sum()),
         n_P_ok=int(ok.sum()),
+        n_P_band_holds_true=int(((m.P_low <= m.P_true) & (m.P_true <= m.P_high)).sum()),
+        n_P_band_defined=int((np.isfinite(m.P_true) & np.isfinite(m.P_low)
+                              & np.isfinite(m.P_high)).sum()),
         n_confident_P_off_2x=int((ok & (ratio > 2)).sum()),
         n_P_within_15pct_or_flagged=int(((m.P_err.abs() <= 0.15)
                                          | (m.P_status == "low_confidence")).sum()))
     cols = ["image", "seed", "has_bar", "area_err", "length_err", "pixel_size_err",
-            "pixel_size_source", "P_true", "P", "P_status", "valid", "valid_note",
-            "pixel_size_note", "data_bar_rows"]
+            "pixel_size_source", "P_true", "P", "P_low", "P_high", "P_status", "valid",
+            "valid_note", "pixel_size_note", "data_bar_rows"]
     meta = dict(machine=platform.machine(), cpus=os.cpu_count(), load=os.getloadavg(),
                 seed0=args.seed0, python=platform.python_version())
     OUT.mkdir(parents=True, exist_ok=True)
@@ -127,7 +130,9 @@ def main(argv=None):
           f"read wrong {s['n_bar_scale_read_wrong']}, unreadable (flagged) "
           f"{s['n_bar_scale_unread_flagged']}, bar not found {s['n_bar_not_found']}")
     print(f"P: status ok {s['n_P_ok']}, confident P off by > 2x {s['n_confident_P_off_2x']}, "
-          f"within 15 % or low_confidence {s['n_P_within_15pct_or_flagged']} of {s['n_images']}")
+          f"within 15 % or low_confidence {s['n_P_within_15pct_or_flagged']} of {s['n_images']}; "
+          f"P band (10-90 %) holds the true P in {s['n_P_band_holds_true']} of the "
+          f"{s['n_P_band_defined']} images where both are defined")
     return 0
 
 

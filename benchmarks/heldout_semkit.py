@@ -57,6 +57,7 @@ def score_image(seed, shape, **options):
                area_true_px=h.area_px, area_px=area, area_err=area / h.area_px - 1,
                length_true_px=h.length_px, length_px=length,
                length_err=length / h.length_px - 1, P_true=h.P, P=row["P"],
+               P_low=row.get("P_low", float("nan")), P_high=row.get("P_high", float("nan")),
                P_status=row.get("P_status", ""), n_cracks_true=len(h.cracks),
                n_cracks=row["n_cracks"], valid=bool(row["valid"]),
                valid_note=row["valid_note"])
@@ -122,6 +123,10 @@ def summarise(rows):
         n_P_low_confidence=int(sum(s == "low_confidence" for s in st)),
         n_P_within_or_flagged=int(sum(w or s == "low_confidence" for w, s in zip(within, st))),
         n_confident_P_off_2x=len(conf_off),
+        n_P_band_holds_true=int(sum(bool(r["P_low"] <= r["P_true"] <= r["P_high"])
+                                    for r in rows)),
+        n_P_band_defined=int(sum(bool(np.isfinite([r["P_true"], r["P_low"],
+                                                   r["P_high"]]).all()) for r in rows)),
         type_acc_by_area_median=float(np.nanmedian([r.get("type_acc_by_area", np.nan)
                                                     for r in rows])),
         seconds_total=float(sum(r["seconds"] for r in rows)), megapixels=mp,
@@ -171,8 +176,9 @@ def main(argv=None):
               f"{(s['P_err_median_confident'] or float('nan')):.1%} | | |")
         print(f"\nP within 15 %: {s['n_P_within_15pct']} of {s['n_images']}; low_confidence: "
               f"{s['n_P_low_confidence']}; within or flagged: {s['n_P_within_or_flagged']}; "
-              f"confident P off by > 2x: {s['n_confident_P_off_2x']}; type accuracy by area "
-              f"(median) {s['type_acc_by_area_median']:.2f}")
+              f"confident P off by > 2x: {s['n_confident_P_off_2x']}; P band (10-90 %) holds "
+              f"the true P in {s['n_P_band_holds_true']} of {s['n_P_band_defined']}; type "
+              f"accuracy by area (median) {s['type_acc_by_area_median']:.2f}")
     print(f"valid: {s['n_valid']} of {s['n_images']}; confidently wrong (valid, area or length "
           f"off by > {WRONG:.0%}): {s['confidently_wrong'] or 'none'}")
     print(f"objects on true cracks: area {s['area_on_cracks_over_true']:.3f} x the true area; "

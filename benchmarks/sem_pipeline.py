@@ -91,7 +91,9 @@ def _errors(images, truth):
         ep = (post.P / post.P_true - 1).abs()
         out.update(P_err_median=float(ep.median()), P_err_max=float(ep.max()),
                    n_P=int(post.P.notna().sum()),
-                   n_P_not_ok=int((post.P_status.astype(str) != "ok").sum()))
+                   n_P_not_ok=int((post.P_status.astype(str) != "ok").sum()),
+                   n_P_band_holds_true=int(((post.P_low <= post.P_true)
+                                            & (post.P_true <= post.P_high)).sum()))
     return out
 
 
