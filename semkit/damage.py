@@ -138,33 +138,43 @@ def image_damage(cracks, *, mixed="exclude", area_column=None):
     return out
 
 
-def _confidence(out, c, area, mixed):
-    """P_low, P_high, P_note and the low_confidence status (semkit.damage_confidence)."""
-    from .damage_confidence import p_confidence
+def _typing_inputs(c, area):
+    """Per-crack inputs of :mod:`semkit.damage_confidence` from a typed cracks table: areas,
+    probabilities (one-hot for user labels, which are certain), trust, group, note, tensile
+    share and the typing model's lean spread."""
     prob = c[["p_tensile", "p_shear", "p_mixed"]].to_numpy(float, copy=True)
+    trusted = c["type_post_ok"].fillna(True).astype(bool).to_numpy() \
+        if "type_post_ok" in c.columns else np.ones(len(c), bool)
     if "type_source" in c.columns:  # user labels are certain
         user = (c["type_source"] == "user").to_numpy()
         kinds = c["type_post"].astype(str).to_numpy()
         for j, k in enumerate(("tensile", "shear", "mixed")):
             prob[user, j] = (kinds[user] == k).astype(float)
-    trusted = c["type_post_ok"].fillna(True).astype(bool).to_numpy() \
-        if "type_post_ok" in c.columns else np.ones(len(c), bool)
-    if "type_source" in c.columns:
-        trusted = trusted | (c["type_source"] == "user").to_numpy()
-    sd = np.nan_to_num(c["type_shift_sd"].to_numpy(float)) if "type_shift_sd" in c \
-        else np.zeros(len(c))
+        trusted = trusted | user
+    n = len(c)
+    return dict(
+        area=area, prob=prob, trusted=trusted,
+        group=c["group_id"].to_numpy() if "group_id" in c else None,
+        notes=c["type_note"].astype(str).to_numpy() if "type_note" in c else None,
+        tensile_fraction=c["tensile_fraction"].to_numpy() if "tensile_fraction" in c
+        else None,
+        shift_sd=np.nan_to_num(c["type_shift_sd"].to_numpy(float)) if "type_shift_sd" in c
+        else np.zeros(n))
 
-    def shift_sd(sel):  # the image's typing model's spread of a common lean
-        return float(sd[sel].max()) if sel.any() else 0.0
+
+def _select(inputs, sel):
+    return {k: (v[sel] if v is not None else None) for k, v in inputs.items()}
+
+
+def _confidence(out, c, area, mixed):
+    """P_low, P_high, P_note and the low_confidence status (semkit.damage_confidence)."""
+    from .damage_confidence import p_confidence
+    inputs = _typing_inputs(c, area)
     cols = {k: [] for k in ("P_low", "P_high", "P_note")}
-    for img, status in zip(out["image"], out["P_status"]):
-        sel = (c["image"] == img).to_numpy()
-        r = p_confidence(area[sel], prob[sel], trusted=trusted[sel],
-                         group=c["group_id"].to_numpy()[sel] if "group_id" in c else None,
-                         mixed=mixed, notes=c["type_note"].astype(str).to_numpy()[sel]
-                         if "type_note" in c else None,
-                         tensile_fraction=c["tensile_fraction"].to_numpy()[sel]
-                         if "tensile_fraction" in c else None, shift_sd=shift_sd(sel))
+    for img in out["image"]:
+        x = _select(inputs, (c["image"] == img).to_numpy())
+        sd = float(x.pop("shift_sd").max()) if len(x["area"]) else 0.0
+        r = p_confidence(x.pop("area"), x.pop("prob"), mixed=mixed, shift_sd=sd, **x)
         cols["P_low"].append(r["P_low"])
         cols["P_high"].append(r["P_high"])
         cols["P_note"].append(r["note"])
@@ -172,6 +182,32 @@ def _confidence(out, c, area, mixed):
         out[k] = v
     low = (out["P_status"] == "ok") & (out["P_note"] != "")
     out.loc[low, "P_status"] = "low_confidence"
+
+
+def _stage_bands(cracks, stages, mixed):
+    """(P_mean_low, P_mean_high) of each stage, given the images in its P_mean."""
+    from .damage_confidence import stage_band
+    nan = (float("nan"), float("nan"))
+    if cracks is None or not {"image", "area_um2", "p_tensile", "p_shear", "p_mixed"} <= set(
+            cracks.columns):
+        return [nan] * len(stages)
+    c = cracks
+    if "rejected_as" in c.columns:
+        c = c[c["rejected_as"].fillna("").astype(str) == ""]
+    c = c[c[["p_tensile", "p_shear", "p_mixed"]].notna().all(axis=1)]
+    col = "area_pv_um2" if "area_pv_um2" in c.columns else "area_um2"
+    inputs = _typing_inputs(c, np.nan_to_num(c[col].to_numpy(float)))
+    names = c["image"].astype(str).to_numpy()
+    out = []
+    for used in stages:
+        ims = [_select(inputs, names == str(n)) for n in used]
+        ims = [x for x in ims if len(x["area"])]
+        if not ims:
+            out.append(nan)
+            continue
+        sd = float(max(x["shift_sd"].max() for x in ims))
+        out.append(stage_band(ims, mixed=mixed, shift_sd=sd))
+    return out
 
 
 def flag_outliers(values, *, z=OUTLIER_Z, min_n=OUTLIER_MIN_N):
@@ -239,7 +275,8 @@ def _stage_status(used, group, checked):
             f"(their P_note says why): {names}", int(len(low)))
 
 
-def damage_table(images, manifest=None, *, z=OUTLIER_Z, min_n=OUTLIER_MIN_N):
+def damage_table(images, manifest=None, *, z=OUTLIER_Z, min_n=OUTLIER_MIN_N, cracks=None,
+                 mixed="exclude"):
     """Aggregate per-image P into ``damage.csv`` rows (specimen x test x stage).
 
     Parameters
@@ -251,6 +288,11 @@ def damage_table(images, manifest=None, *, z=OUTLIER_Z, min_n=OUTLIER_MIN_N):
         ``manifest.csv`` (``image, specimen, test, stage``), joined on ``image``.
     z, min_n : float, int
         Outlier rule (:func:`flag_outliers`), applied per ``test``.
+    cracks : pandas.DataFrame, optional
+        The typed ``cracks.csv`` table (``image``, areas, ``p_tensile, p_shear, p_mixed`` and
+        the typing columns): gives each stage's ``P_mean_low, P_mean_high``.
+    mixed : str
+        As :func:`image_damage`, for the band.
 
     Returns
     -------
@@ -261,7 +303,10 @@ def damage_table(images, manifest=None, *, z=OUTLIER_Z, min_n=OUTLIER_MIN_N):
         outlier_images, P_mean`` (mean of finite per-image P, outliers left out),
         ``P_mean_all`` (outliers kept), ``P_median, P_pooled`` (sum A_T / sum A_S over the
         non-outlier images, including those with A_S = 0; NaN without areas),
-        ``area_T_um2, area_S_um2, n_low_confidence, P_status, P_note``.
+        ``area_T_um2, area_S_um2, n_low_confidence, P_status, P_note``, and ``P_mean_low,
+        P_mean_high``: the 10-90 % band of ``P_mean`` from its images' typing
+        (:func:`semkit.damage_confidence.stage_band`, one common lean per draw for the whole
+        stage; NaN without ``cracks``).
 
     Notes
     -----
@@ -297,7 +342,7 @@ def damage_table(images, manifest=None, *, z=OUTLIER_Z, min_n=OUTLIER_MIN_N):
     for _, idx in df.groupby("test", sort=False).groups.items():
         df.loc[idx, "P_outlier"] = flag_outliers(df.loc[idx, "P"].to_numpy(), z=z, min_n=min_n)
     has_area = "area_T_um2" in df.columns and "area_S_um2" in df.columns
-    rows = []
+    rows, used = [], []
     for (spec, test, stage), g in df.groupby(list(keys), sort=False):
         keep = g[~g["P_outlier"]]
         p_keep = keep["P"].to_numpy()
@@ -317,6 +362,9 @@ def damage_table(images, manifest=None, *, z=OUTLIER_Z, min_n=OUTLIER_MIN_N):
             P_pooled=float(damage_ratio(a_t, a_s)) if has_area else np.nan,
             area_T_um2=a_t, area_S_um2=a_s, n_low_confidence=n_low, P_status=status,
             P_note=note))
+        used.append(keep.loc[fin, "image"].tolist())
+    for r, (lo, hi) in zip(rows, _stage_bands(cracks, used, mixed)):
+        r.update(P_mean_low=lo, P_mean_high=hi)
     dmg = pd.DataFrame(rows)
     if len(dmg):
         order = sorted(range(len(dmg)), key=lambda i: (str(dmg.specimen[i]), str(dmg.test[i]),
@@ -327,7 +375,8 @@ def damage_table(images, manifest=None, *, z=OUTLIER_Z, min_n=OUTLIER_MIN_N):
 
 def plot_p_by_stage(damage, path=None, *, ax=None):
     """Plot P (mean per stage, outliers left out) by loading stage, one line per test; a
-    stage whose ``P_status`` is ``low_confidence`` is drawn hollow.
+    stage whose ``P_status`` is ``low_confidence`` is drawn hollow, and its ``P_mean_low``..
+    ``P_mean_high`` band, where given, as a light bar.
 
     Parameters
     ----------
@@ -349,10 +398,19 @@ def plot_p_by_stage(damage, path=None, *, ax=None):
     import matplotlib.pyplot as plt
     fig = ax.figure if ax is not None else plt.figure(figsize=(5, 3.5))
     ax = ax if ax is not None else fig.add_subplot(111)
-    any_low = False
-    for (spec, test), g in damage.groupby(["specimen", "test"], sort=False):
+    any_low = any_band = False
+    lines = list(damage.groupby(["specimen", "test"], sort=False))
+    for i, ((spec, test), g) in enumerate(lines):
         g = g.iloc[sorted(range(len(g)), key=lambda i: _stage_key(g.stage.iloc[i]))]
         line, = ax.plot(g["stage"].astype(str), g["P_mean"], "o-", label=f"{test} ({spec})")
+        if {"P_mean_low", "P_mean_high"} <= set(g.columns):
+            lo, hi = g["P_mean_low"].to_numpy(float), g["P_mean_high"].to_numpy(float)
+            ok = np.isfinite(lo) & np.isfinite(hi)
+            if ok.any():  # the typing's 10-90 % band of P_mean, the lines side by side
+                any_band = True
+                pos = ax.xaxis.convert_units(g["stage"].astype(str).to_numpy()[ok])
+                ax.vlines(np.asarray(pos, float) + 0.06 * (i - (len(lines) - 1) / 2), lo[ok],
+                          hi[ok], color=line.get_color(), lw=3, alpha=0.35)
         if "P_status" in g.columns:
             low = (g["P_status"] == "low_confidence").to_numpy()
             if low.any():  # hollow markers over the stages whose P is low_confidence
@@ -361,6 +419,8 @@ def plot_p_by_stage(damage, path=None, *, ax=None):
                         mfc="white", mec=line.get_color(), mew=1.5)
     if any_low:
         ax.plot([], [], "o", mfc="white", mec="0.3", label="low_confidence (hollow)")
+    if any_band:
+        ax.plot([], [], "-", color="0.3", lw=3, alpha=0.35, label="10-90 % band (typing)")
     ax.axhline(1.0, color="0.6", lw=0.8, ls="--")
     ax.set_xlabel("stage")
     ax.set_ylabel("P = A_T / A_S (Equ. 3-1)")

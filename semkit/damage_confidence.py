@@ -34,7 +34,7 @@ import numpy as np
 
 from .errors import InputError
 
-__all__ = ["p_confidence", "N_DRAWS", "P_BAND", "P_SPREAD_MAX", "UNTRUSTED_AREA_MAX"]
+__all__ = ["p_confidence", "stage_band", "N_DRAWS", "P_BAND", "P_SPREAD_MAX", "UNTRUSTED_AREA_MAX"]
 
 N_DRAWS = 400
 P_BAND = (0.1, 0.9)
@@ -44,14 +44,16 @@ _SEED = 0
 _NO_SHEAR_DRAWS_MAX = 0.1
 
 
-def _draw_areas(area, prob, mixed, tensile_fraction, rng, shift_sd=0.0):
+def _draw_areas(area, prob, mixed, tensile_fraction, rng, shift_sd=0.0, shift=None):
     """A_T and A_S of N_DRAWS type draws (groups x draws); each draw shifts the tensile-vs-shear
-    log-odds of every group by one normal deviate of standard deviation ``shift_sd``."""
+    log-odds of every group by one normal deviate of standard deviation ``shift_sd`` (or by
+    the given ``shift``, one value per draw)."""
     u = rng.random((N_DRAWS, len(area)))
     p = np.broadcast_to(prob, (N_DRAWS, *prob.shape))
-    if shift_sd > 0:
-        d = rng.standard_normal(N_DRAWS) * shift_sd
-        p = p * np.exp(np.outer(d, [0.5, -0.5, 0.0]))[:, None, :]
+    if shift is None and shift_sd > 0:
+        shift = rng.standard_normal(N_DRAWS) * shift_sd
+    if shift is not None:
+        p = p * np.exp(np.outer(shift, [0.5, -0.5, 0.0]))[:, None, :]
         p = p / np.maximum(p.sum(axis=2, keepdims=True), 1e-300)
     cum = np.cumsum(p, axis=2)
     k = (u[:, :, None] > cum[:, :, :-1]).sum(axis=2)   # 0 tensile, 1 shear, 2 mixed
@@ -62,6 +64,25 @@ def _draw_areas(area, prob, mixed, tensile_fraction, rng, shift_sd=0.0):
     a_t = ((k == 0) * area + (k == 2) * area * f_m_t).sum(axis=1)
     a_s = ((k == 1) * area + (k == 2) * area * f_m_s).sum(axis=1)
     return a_t, a_s
+
+
+def _groups(area, prob, group, tensile_fraction):
+    """Area, area-weighted probabilities and tensile share of each group (one type draw per
+    group); every crack its own group without ``group``."""
+    area = np.asarray(area, float)
+    prob = np.clip(np.nan_to_num(np.asarray(prob, float).reshape(-1, 3), nan=1 / 3), 0, 1)
+    prob = prob / np.maximum(prob.sum(axis=1, keepdims=True), 1e-12)
+    tf = np.full(len(area), 0.5) if tensile_fraction is None else np.nan_to_num(
+        np.asarray(tensile_fraction, float), nan=0.5)
+    if group is None or not len(area):
+        return area, prob, tf
+    _, inv = np.unique(np.asarray(group), return_inverse=True)
+    t_area = np.bincount(inv, weights=area)
+    t_prob = np.zeros((inv.max() + 1, 3))
+    np.add.at(t_prob, inv, prob * area[:, None])
+    t_prob /= np.maximum(t_area[:, None], 1e-12)
+    t_tf = np.bincount(inv, weights=tf * area) / np.maximum(t_area, 1e-12)
+    return t_area, t_prob, t_tf
 
 
 def p_confidence(area, prob, *, trusted=None, group=None, mixed="exclude",
@@ -111,21 +132,9 @@ def p_confidence(area, prob, *, trusted=None, group=None, mixed="exclude",
     True
     """
     area = np.asarray(area, float)
-    prob = np.clip(np.nan_to_num(np.asarray(prob, float).reshape(-1, 3), nan=1 / 3), 0, 1)
-    prob = prob / np.maximum(prob.sum(axis=1, keepdims=True), 1e-12)
     n = len(area)
     trusted = np.ones(n, bool) if trusted is None else np.asarray(trusted, bool)
-    tf = np.full(n, 0.5) if tensile_fraction is None else np.nan_to_num(
-        np.asarray(tensile_fraction, float), nan=0.5)
-    if group is not None and n:
-        _, inv = np.unique(np.asarray(group), return_inverse=True)
-        t_area = np.bincount(inv, weights=area)
-        t_prob = np.zeros((inv.max() + 1, 3))
-        np.add.at(t_prob, inv, prob * area[:, None])
-        t_prob /= np.maximum(t_area[:, None], 1e-12)
-        t_tf = np.bincount(inv, weights=tf * area) / np.maximum(t_area, 1e-12)
-    else:
-        t_area, t_prob, t_tf = area, prob, tf
+    t_area, t_prob, t_tf = _groups(area, prob, group, tensile_fraction)
     out = dict(P_low=float("nan"), P_high=float("nan"), low_confidence=False, note="")
     if n == 0 or area.sum() <= 0:
         return out
@@ -159,3 +168,64 @@ def p_confidence(area, prob, *, trusted=None, group=None, mixed="exclude",
     out["low_confidence"] = bool(reasons)
     out["note"] = "; ".join(reasons)
     return out
+
+
+def stage_band(images, *, mixed="exclude", shift_sd=0.0):
+    """Band of a stage's mean P (``P_mean`` of ``damage.csv``) from its images' typing.
+
+    Each of ``N_DRAWS`` draws types every group of every image from its calibrated
+    probabilities, as :func:`p_confidence` does, with one tensile-versus-shear log-odds shift
+    for the whole stage in that draw: a stage's images come from one microscope and rock, so
+    their leans are not independent either and averaging images does not remove it. Each
+    draw's mean is taken over the images with a finite P in that draw (as ``P_mean`` is).
+
+    Parameters
+    ----------
+    images : list of dict
+        One per image in the stage's mean: ``area``, ``prob`` and optionally ``group`` and
+        ``tensile_fraction``, as for :func:`p_confidence`.
+    mixed : str
+        As :func:`semkit.damage.image_damage`.
+    shift_sd : float
+        Standard deviation of the common lean (``type_shift_sd``).
+
+    Returns
+    -------
+    low, high : float
+        The ``P_BAND`` quantiles of the mean over the draws; NaN where undefined (no image
+        with cracks, or more than 10 % of the draws without a finite P in any image for
+        ``high``).
+
+    Examples
+    --------
+    >>> one = dict(area=[10] * 40, prob=[[0.9, 0.1, 0]] * 20 + [[0.1, 0.9, 0]] * 20)
+    >>> [round(v, 2) for v in stage_band([one])]                # one image
+    [0.82, 1.22]
+    >>> [round(v, 2) for v in stage_band([one] * 5)]            # independent: averaging narrows
+    [0.91, 1.15]
+    >>> [round(v, 2) for v in stage_band([one] * 5, shift_sd=2.0)]  # one lean: it does not
+    [0.28, 2.61]
+    """
+    if not shift_sd >= 0:
+        raise InputError(f"shift_sd: expected a standard deviation >= 0, got {shift_sd}")
+    shift = np.random.default_rng(_SEED + 1).standard_normal(N_DRAWS) * float(shift_sd)
+    rng = np.random.default_rng(_SEED)
+    draws = []
+    for im in images:
+        t_area, t_prob, t_tf = _groups(im["area"], im["prob"], im.get("group"),
+                                       im.get("tensile_fraction"))
+        if not len(t_area) or t_area.sum() <= 0:
+            continue
+        a_t, a_s = _draw_areas(t_area, t_prob, mixed, t_tf, rng, shift=shift)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            draws.append(np.where(a_s > 0, a_t / a_s, np.inf))
+    if not draws:
+        return float("nan"), float("nan")
+    p = np.array(draws)
+    fin = np.isfinite(p)
+    n_fin = fin.sum(axis=0)
+    mean = np.where(n_fin > 0, np.where(fin, p, 0.0).sum(axis=0) / np.maximum(n_fin, 1),
+                    np.inf)
+    lo, hi = np.quantile(mean, P_BAND)
+    return (float(lo) if np.isfinite(lo) else float("nan"),
+            float(hi) if np.isfinite(hi) else float("nan"))

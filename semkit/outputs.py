@@ -94,7 +94,7 @@ def write_science_outputs(out, images, cracks, *, manifest=None, labels=None, gr
             and "P" in images.columns and len(images):
         ok = images[images["image"].isin(manifest["image"].astype(str))]
         if len(ok):
-            flagged, dmg = damage_table(ok, manifest)
+            flagged, dmg = damage_table(ok, manifest, cracks=cracks if len(cracks) else None)
             write_csv_atomic(dmg, out / "damage.csv")
             if "P_outlier" in flagged.columns:
                 images = images.drop(columns=["P_outlier"], errors="ignore").merge(

@@ -112,3 +112,45 @@ def test_a_stage_p_is_low_confidence_when_an_image_in_its_mean_is(tmp_path):
     fig = plot_p_by_stage(dmg, tmp_path / "p.png")
     hollow = [ln for ln in fig.axes[0].lines if ln.get_markerfacecolor() == "white"]
     assert len(hollow[0].get_xdata()) == 1 and (tmp_path / "p.png").exists()
+
+
+def _typed_cracks(images, shift_sd):
+    """Per image 40 crack groups: 20 typed tensile and 20 shear at 0.9 (true P 1)."""
+    rows = []
+    for name in images:
+        for k in range(40):
+            t = k < 20
+            rows.append(dict(image=name, crack_id=k + 1, area_um2=10.0, group_id=k + 1,
+                             type_post="tensile" if t else "shear",
+                             p_tensile=0.9 if t else 0.1, p_shear=0.1 if t else 0.9,
+                             p_mixed=0.0, type_post_ok=True, type_note="",
+                             type_shift_sd=shift_sd, rejected_as=""))
+    return pd.DataFrame(rows)
+
+
+def test_a_stage_band_keeps_the_common_lean_that_averaging_images_does_not_remove(tmp_path):
+    names = [f"s{i}.tif" for i in range(5)]
+    imgs = pd.DataFrame(dict(image=names, specimen="S1", test="ucs", stage="failure", P=1.0,
+                             P_status="low_confidence"))
+    bands = {}
+    for sd in (0.0, 2.0):
+        cracks = _typed_cracks(names, sd)
+        # a rejected object and a crack of an image outside the table count in no band
+        cracks.loc[len(cracks)] = dict(cracks.iloc[0], crack_id=99, area_um2=1e6,
+                                       rejected_as="mottled")
+        _, dmg = damage_table(imgs, cracks=cracks)
+        r = dmg.iloc[0]
+        assert r.P_mean_low <= r.P_mean <= r.P_mean_high
+        bands[sd] = r.P_mean_high / r.P_mean_low
+        one = image_damage(cracks[(cracks.image == names[0]) & (cracks.crack_id != 99)]).iloc[0]
+        assert one.P == pytest.approx(1.0)
+        bands[sd, "one image"] = one.P_high / one.P_low
+    # independent draws: five images narrow the band of one; a lean shared by the stage's
+    # images stays in their mean
+    assert bands[0.0] < bands[0.0, "one image"] < 1.6
+    assert bands[2.0] > 4 and bands[2.0] > 0.6 * bands[2.0, "one image"]
+    _, dmg = damage_table(imgs)                           # no cracks table: no band
+    assert np.isnan(dmg.P_mean_low.iloc[0]) and np.isnan(dmg.P_mean_high.iloc[0])
+    _, dmg = damage_table(imgs, cracks=_typed_cracks(names, 2.0))
+    fig = plot_p_by_stage(dmg, tmp_path / "p.png")
+    assert any(len(c.get_segments()) == 1 for c in fig.axes[0].collections)   # the band bar
