@@ -70,6 +70,10 @@ def main(argv=None):
         images, _ = analyse_folder(imgs, tmp / "out", jobs=args.jobs, progress=False,
                                    overlays=False)
         wall = time.perf_counter() - t0
+        stage = pd.read_csv(tmp / "out" / "damage.csv").iloc[0] \
+            if (tmp / "out" / "damage.csv").exists() else None
+        outlier = pd.read_csv(tmp / "out" / "images.csv").set_index("image")["P_outlier"] \
+            if stage is not None else None
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
     m = truth.merge(images, on="image", suffixes=("_true", ""))
@@ -108,6 +112,12 @@ def main(argv=None):
         n_confident_P_off_2x=int((ok & (ratio > 2)).sum()),
         n_P_within_15pct_or_flagged=int(((m.P_err.abs() <= 0.15)
                                          | (m.P_status == "low_confidence")).sum()))
+    if stage is not None:  # the folder is one stage: its P_mean and band against the truth
+        used = m[np.isfinite(m.P) & ~m.image.map(outlier).fillna(False).astype(bool)]
+        s.update(stage_P_mean=float(stage.P_mean), stage_P_mean_low=float(stage.P_mean_low),
+                 stage_P_mean_high=float(stage.P_mean_high),
+                 stage_P_true_mean=float(used.P_true.mean()),
+                 stage_P_status=str(stage.P_status))
     cols = ["image", "seed", "has_bar", "area_err", "length_err", "pixel_size_err",
             "pixel_size_source", "P_true", "P", "P_low", "P_high", "P_status", "valid",
             "valid_note", "pixel_size_note", "data_bar_rows"]
@@ -133,6 +143,11 @@ def main(argv=None):
           f"within 15 % or low_confidence {s['n_P_within_15pct_or_flagged']} of {s['n_images']}; "
           f"P band (10-90 %) holds the true P in {s['n_P_band_holds_true']} of the "
           f"{s['n_P_band_defined']} images where both are defined")
+    if "stage_P_mean" in s:
+        print(f"the folder as one stage: P_mean {s['stage_P_mean']:.3g} (band "
+              f"{s['stage_P_mean_low']:.3g}..{s['stage_P_mean_high']:.3g}, "
+              f"{s['stage_P_status']}); mean true P of the same images "
+              f"{s['stage_P_true_mean']:.3g}")
     return 0
 
 
