@@ -104,11 +104,13 @@ def sem_damage(sem_dir):
     Returns
     -------
     damage : dict
-        ``{"by_stage": [{specimen, test, stage, P_mean, P_pooled, P_status}, ...],
+        ``{"by_stage": [{specimen, test, stage, P_mean, P_mean_low, P_mean_high, P_pooled,
+        P_status}, ...],
         "P_pooled": float, "P_status": str, "P_note": str}`` where ``P_pooled`` pools A_T and
         A_S over every loaded (not pre-test) stage, ``low_confidence`` when any loaded stage
         is (semkit's ``damage.csv`` ``P_status``, which names the images); empty when semkit
-        wrote no ``damage.csv``.
+        wrote no ``damage.csv``. ``P_mean_low, P_mean_high`` are the typing's 10-90 % band of
+        the stage's ``P_mean`` (absent from a ``damage.csv`` written without it).
     """
     import pandas as pd
 
@@ -120,8 +122,9 @@ def sem_damage(sem_dir):
         d["P_status"] = "unchecked"
     loaded = d[d["stage"].astype(str) != "pre-test"]
     a_t, a_s = float(loaded["area_T_um2"].sum()), float(loaded["area_S_um2"].sum())
-    rows = [{k: (None if pd.isna(r[k]) else r[k]) for k in
-             ("specimen", "test", "stage", "P_mean", "P_pooled", "P_status")}
+    keys = ("specimen", "test", "stage", "P_mean", "P_mean_low", "P_mean_high", "P_pooled",
+            "P_status")
+    rows = [{k: (None if pd.isna(r[k]) else r[k]) for k in keys if k in d.columns}
             for _, r in d.iterrows()]
     statuses = loaded["P_status"].astype(str)
     low = loaded[statuses == "low_confidence"]

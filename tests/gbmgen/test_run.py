@@ -133,6 +133,10 @@ def test_run_whole_chain_sets_sem_p_beside_simulated_p(tmp_path, capsys):
     # the pooled P carries the loaded stage's status
     assert run["P_sem"]["P_status"] == failure["P_status"]
     assert (failure["P_status"] == "low_confidence") == ("low_confidence" in run["P_sem"]["P_note"])
+    # and the stage's typing band of its P_mean
+    row = next(r for r in run["P_sem"]["by_stage"] if r["stage"] == "failure")
+    assert row["P_mean_low"] == pytest.approx(failure["P_mean_low"])
+    assert 0 < row["P_mean_low"] < row["P_mean_high"] == pytest.approx(failure["P_mean_high"])
     assert "simulated ucs" in capsys.readouterr().err
 
 
