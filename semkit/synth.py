@@ -654,7 +654,10 @@ def write_sample_set(out_dir, *, shape=(576, 768), seed=2026) -> pd.DataFrame:
     Returns
     -------
     truth : DataFrame
-        One row per image (the content of ``truth.csv``).
+        One row per image (the content of ``truth.csv``): the crack area and length, the
+        crack area fraction of the image, and for post-test images the tensile and shear
+        coverage areas ``area_T_px, area_S_px`` and P = A_T / A_S (mixed cracks left out, as
+        ``semkit analyse`` does by default; NaN for pre-test images).
     """
     from .config import MAGNIFICATION_TABLE_UM
     from .io import write_csv_atomic, write_image
@@ -671,11 +674,18 @@ def write_sample_set(out_dir, *, shape=(576, 768), seed=2026) -> pd.DataFrame:
         write_image(out / fname, s.image)
         man.append(dict(image=fname, specimen="S1", test="ucs", stage=sstage, magnification=mag,
                         pixel_size_um=px))
+        kind = s.cracks["type_post"].astype(str)
+        a_t = float(s.cracks.loc[kind == "tensile", "area_cov_px"].sum())
+        a_s = float(s.cracks.loc[kind == "shear", "area_cov_px"].sum())
         truth.append(dict(image=fname, stage=stage, gradient=grad, n_cracks=len(s.cracks),
                           crack_area_px=s.crack_area_px, crack_length_px=s.crack_length_px,
                           crack_area_um2=s.crack_area_px * px * px,
                           crack_length_um=s.crack_length_px * px,
-                          area_S_px=s.image.size, P=s.crack_area_px / s.image.size,
+                          sample_area_px=s.image.size,
+                          crack_area_fraction=s.crack_area_px / s.image.size,
+                          area_T_px=a_t if stage == "post" else np.nan,
+                          area_S_px=a_s if stage == "post" else np.nan,
+                          P=a_t / a_s if stage == "post" and a_s > 0 else np.nan,
                           seed=seed + k))
         c = s.cracks.copy()
         c.insert(0, "image", fname)

@@ -167,3 +167,22 @@ def test_lenses_are_crack_dark_and_no_cracks():
     lens, crack = np.median(s.image[s.lens_mask]), np.median(s.image[core])
     assert crack - 5 <= lens <= crack + 25
     assert lens < np.percentile(s.image[rock], 1) - 30
+
+
+def test_the_sample_set_truth_p_is_tensile_over_shear_area(tmp_path, monkeypatch):
+    """``truth.csv``'s P is the damage ratio semkit reports (A_T / A_S of the tensile and shear
+    cracks, mixed left out), not the crack area fraction, which has its own column."""
+    import pandas as pd
+
+    import semkit.synth as synth
+    # a pre-test and a failure image of the set, small
+    monkeypatch.setattr(synth, "SAMPLE_SET", synth.SAMPLE_SET[:1] + synth.SAMPLE_SET[-1:])
+    truth = synth.write_sample_set(tmp_path, shape=(144, 192))
+    cracks = pd.read_csv(tmp_path / "truth_cracks.csv")
+    pre, post = truth.iloc[0], truth.iloc[1]
+    assert pre.stage == "pre" and np.isnan(pre.P) and np.isnan(pre.area_T_px)
+    c = cracks[cracks.image == post.image]
+    a_t = c.loc[c.type_post == "tensile", "area_cov_px"].sum()
+    a_s = c.loc[c.type_post == "shear", "area_cov_px"].sum()
+    assert a_t > 0 and a_s > 0 and post.P == pytest.approx(a_t / a_s)
+    assert post.crack_area_fraction == pytest.approx(post.crack_area_px / (144 * 192))
