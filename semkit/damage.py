@@ -400,7 +400,7 @@ def plot_p_by_stage(damage, path=None, *, ax=None):
     ax = ax if ax is not None else fig.add_subplot(111)
     any_low = any_band = False
     lines = list(damage.groupby(["specimen", "test"], sort=False))
-    for i, ((spec, test), g) in enumerate(lines):
+    for n, ((spec, test), g) in enumerate(lines):
         g = g.iloc[sorted(range(len(g)), key=lambda i: _stage_key(g.stage.iloc[i]))]
         line, = ax.plot(g["stage"].astype(str), g["P_mean"], "o-", label=f"{test} ({spec})")
         if {"P_mean_low", "P_mean_high"} <= set(g.columns):
@@ -409,7 +409,7 @@ def plot_p_by_stage(damage, path=None, *, ax=None):
             if ok.any():  # the typing's 10-90 % band of P_mean, the lines side by side
                 any_band = True
                 pos = ax.xaxis.convert_units(g["stage"].astype(str).to_numpy()[ok])
-                ax.vlines(np.asarray(pos, float) + 0.06 * (i - (len(lines) - 1) / 2), lo[ok],
+                ax.vlines(np.asarray(pos, float) + 0.06 * (n - (len(lines) - 1) / 2), lo[ok],
                           hi[ok], color=line.get_color(), lw=3, alpha=0.35)
         if "P_status" in g.columns:
             low = (g["P_status"] == "low_confidence").to_numpy()
