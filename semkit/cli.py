@@ -173,6 +173,8 @@ def _run_analyse(args):
     if skipped:
         print(f"semkit: skipped {len(skipped)} non-image file(s): {', '.join(skipped)}",
               file=sys.stderr)
+    for line in _p_lines(args.out):
+        print(line, file=sys.stderr)
     failed = images["error"].fillna("").astype(str).str.len() > 0
     n_fail = int(failed.sum())
     if n_fail:
@@ -181,6 +183,32 @@ def _run_analyse(args):
               f"{first['error']}); see {args.out}/images.csv", file=sys.stderr)
         return 1
     return 0
+
+
+def _p_lines(out):
+    """One line per specimen and test of ``damage.csv``: each stage's P_mean with its band,
+    and whether any is low_confidence (nothing when no stage has a P)."""
+    import pathlib
+
+    import pandas as pd
+    path = pathlib.Path(out) / "damage.csv"
+    if not path.is_file():
+        return []
+    d = pd.read_csv(path)
+    d = d[pd.to_numeric(d.get("P_mean"), errors="coerce").notna()]
+    lines = []
+    for (spec, test), g in d.groupby(["specimen", "test"], sort=False):
+        parts = []
+        for r in g.itertuples():
+            lo, hi = getattr(r, "P_mean_low", float("nan")), getattr(r, "P_mean_high", float("nan"))
+            band = f" ({lo:.3g}-{hi:.3g})" if pd.notna(lo) and pd.notna(hi) else \
+                (f" ({lo:.3g}-open)" if pd.notna(lo) else "")
+            parts.append(f"{r.stage} {r.P_mean:.3g}{band}")
+        low = (g["P_status"].astype(str) == "low_confidence").any() if "P_status" in g else False
+        lines.append(f"semkit: P = A_T/A_S, {spec} {test}, mean by stage (10-90 % typing band): "
+                     + ", ".join(parts) + ("; low_confidence: quote the band (damage.csv "
+                                           "P_note)" if low else ""))
+    return lines
 
 
 # ----------------------------------------------------------- semkit grains | indices | classify

@@ -30,7 +30,7 @@ def folder(tmp_path_factory):
     return d, truth
 
 
-def test_analyse_writes_types_p_damage_and_grains(folder, tmp_path):
+def test_analyse_writes_types_p_damage_and_grains(folder, tmp_path, capsys):
     d, truth = folder
     out = tmp_path / "out"
     rc = main(["analyse", str(d), "--out", str(out), "--jobs", "1", "--no-progress",
@@ -58,6 +58,11 @@ def test_analyse_writes_types_p_damage_and_grains(folder, tmp_path):
     assert dmg.set_index("stage").loc["failure", "P_mean"] == pytest.approx(
         imgs.loc["img2.png", "P"])
     assert (out / "P_by_stage.png").stat().st_size > 1000
+    # the run ends with each stage's mean P and its band, as damage.csv has them
+    f = dmg.set_index("stage").loc["failure"]
+    line = [ln for ln in capsys.readouterr().err.splitlines() if "A_T/A_S" in ln]
+    assert len(line) == 1 and "pre-test" not in line[0]
+    assert f"failure {f.P_mean:.3g} ({f.P_mean_low:.3g}-" in line[0]
     g = pd.read_csv(out / "grains.csv")
     assert set(g.mineral) == set(NAMES.split(","))
     vf = g.groupby("mineral").volume_fraction_pct.first()
