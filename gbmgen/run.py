@@ -98,19 +98,31 @@ def run_test(spec, test, out, *, progress=True, **options):
     return run_protocol(test, spec, out=str(out), progress=progress, **options).summary
 
 
-def sem_damage(sem_dir):
+def sem_damage(sem_dir, manifest=None):
     """SEM damage ratio P = A_T/A_S (Equ. 3-1) from semkit's ``damage.csv``, per stage and pooled.
+
+    Parameters
+    ----------
+    sem_dir : path
+        semkit's output folder.
+    manifest : path, optional
+        The images' ``manifest.csv`` (their stages, for the pooled band).
 
     Returns
     -------
     damage : dict
         ``{"by_stage": [{specimen, test, stage, P_mean, P_mean_low, P_mean_high, P_pooled,
-        P_status}, ...],
-        "P_pooled": float, "P_status": str, "P_note": str}`` where ``P_pooled`` pools A_T and
-        A_S over every loaded (not pre-test) stage, ``low_confidence`` when any loaded stage
-        is (semkit's ``damage.csv`` ``P_status``, which names the images); empty when semkit
-        wrote no ``damage.csv``. ``P_mean_low, P_mean_high`` are the typing's 10-90 % band of
-        the stage's ``P_mean`` (absent from a ``damage.csv`` written without it).
+        P_status}, ...], "P_pooled": float, "P_pooled_low": float, "P_pooled_high": float,
+        "P_status": str, "P_note": str}``; empty when semkit wrote no ``damage.csv``.
+
+        * ``P_pooled`` pools A_T and A_S over every loaded (not pre-test) stage;
+          ``P_pooled_low, P_pooled_high`` is its 10-90 % typing band (one common lean for all
+          the images; None without the ``manifest`` or semkit's ``images.csv`` and
+          ``cracks.csv``).
+        * ``P_status`` is ``low_confidence`` when any loaded stage is (semkit's
+          ``damage.csv`` ``P_status``, which names the images).
+        * ``P_mean_low, P_mean_high`` are the typing's 10-90 % band of the stage's ``P_mean``
+          (absent from a ``damage.csv`` written without it).
     """
     import pandas as pd
 
@@ -126,6 +138,7 @@ def sem_damage(sem_dir):
             "P_status")
     rows = [{k: (None if pd.isna(r[k]) else r[k]) for k in keys if k in d.columns}
             for _, r in d.iterrows()]
+    band = _pooled_band(pathlib.Path(sem_dir), loaded, manifest)
     statuses = loaded["P_status"].astype(str)
     low = loaded[statuses == "low_confidence"]
     status, note = "ok", ""
@@ -137,7 +150,35 @@ def sem_damage(sem_dir):
     elif (statuses == "unchecked").any():
         status = "unchecked"
     return {"by_stage": rows, "P_pooled": a_t / a_s if a_s > 0 else None,
-            "P_status": status, "P_note": note}
+            "P_pooled_low": band[0], "P_pooled_high": band[1], "P_status": status,
+            "P_note": note}
+
+
+def _pooled_band(sem_dir, loaded, manifest):
+    """The typing's 10-90 % band of the pooled SEM P: semkit's ``cracks.csv`` over the images
+    of the loaded stages that ``P_pooled`` sums (``manifest.csv`` gives their stages; images
+    semkit flagged ``P_outlier`` left out); (None, None) without them."""
+    import numpy as np
+    import pandas as pd
+
+    from semkit.damage import p_band
+    ipath, cpath = sem_dir / "images.csv", sem_dir / "cracks.csv"
+    if manifest is None or not (pathlib.Path(manifest).is_file() and ipath.exists()
+                                and cpath.exists()):
+        return None, None
+    keys = ["specimen", "test", "stage"]
+    man = pd.read_csv(manifest)
+    imgs = pd.read_csv(ipath)
+    if not {"image", *keys} <= set(man.columns) or "image" not in imgs.columns:
+        return None, None
+    imgs = imgs.merge(man[["image", *keys]].astype(str), on="image", how="inner")
+    stages = set(loaded[keys].astype(str).apply(tuple, axis=1))
+    mine = imgs[keys].apply(tuple, axis=1).isin(stages)
+    if "P_outlier" in imgs.columns:
+        mine &= ~imgs["P_outlier"].fillna(False).astype(bool)
+    lo, hi = p_band(pd.read_csv(cpath), imgs.loc[mine, "image"].astype(str),
+                    statistic="pooled")
+    return (float(lo) if np.isfinite(lo) else None), (float(hi) if np.isfinite(hi) else None)
 
 
 def run(images_dir="sample_images", out="gbmgen_run", *, minerals=DEFAULT_MINERALS,
@@ -249,7 +290,7 @@ def run(images_dir="sample_images", out="gbmgen_run", *, minerals=DEFAULT_MINERA
         "scenario": spec.meta["scenario"],
         "MHI_target": spec.meta["MHI_target"], "MHI_realised": spec.meta["MHI_realised"],
         "test": test, "test_summary": test_summary,
-        "P_sem": sem_damage(sem) if cracks else {},
+        "P_sem": sem_damage(sem, images_dir / "manifest.csv") if cracks else {},
         "semkit_files": sorted(os.listdir(sem)),
         "timing_s": {k: round(v, 3) for k, v in timing.items()},
     }

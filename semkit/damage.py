@@ -23,7 +23,7 @@ from .errors import InputError
 from .indices import damage_ratio
 
 __all__ = ["p_status", "image_damage", "typed_areas", "darkness_fraction", "flag_outliers",
-           "damage_table", "plot_p_by_stage", "STAGE_ORDER", "OUTLIER_Z", "OUTLIER_MIN_N"]
+           "damage_table", "p_band", "plot_p_by_stage", "STAGE_ORDER", "OUTLIER_Z", "OUTLIER_MIN_N"]
 
 #: Order of the loading stages on the P-by-stage plot and in ``damage.csv``.
 STAGE_ORDER = config.STAGE_ORDER
@@ -184,13 +184,36 @@ def _confidence(out, c, area, mixed):
     out.loc[low, "P_status"] = "low_confidence"
 
 
-def _stage_bands(cracks, stages, mixed):
-    """(P_mean_low, P_mean_high) of each stage, given the images in its P_mean."""
+def p_band(cracks, images, *, statistic="mean", mixed="exclude"):
+    """The typing's 10-90 % band of the mean P (``statistic="mean"``, as ``P_mean``) or of the
+    pooled sum A_T / sum A_S (``"pooled"``, as ``P_pooled``) of some images.
+
+    Parameters
+    ----------
+    cracks : pandas.DataFrame
+        A typed ``cracks.csv`` table (``image``, ``area_um2`` or ``area_pv_um2``, ``p_tensile,
+        p_shear, p_mixed`` and the typing columns); rejected objects (``rejected_as``) and
+        untyped rows are left out.
+    images : sequence of str
+        The images taken together.
+    statistic, mixed : str
+        As :func:`semkit.damage_confidence.stage_band`.
+
+    Returns
+    -------
+    low, high : float
+        NaN without typed cracks of these images.
+    """
+    return _bands(cracks, [list(images)], mixed, statistic)[0]
+
+
+def _bands(cracks, groups, mixed, statistic="mean"):
+    """(low, high) of each list of images in ``groups`` (see :func:`p_band`)."""
     from .damage_confidence import stage_band
     nan = (float("nan"), float("nan"))
     if cracks is None or not {"image", "area_um2", "p_tensile", "p_shear", "p_mixed"} <= set(
             cracks.columns):
-        return [nan] * len(stages)
+        return [nan] * len(groups)
     c = cracks
     if "rejected_as" in c.columns:
         c = c[c["rejected_as"].fillna("").astype(str) == ""]
@@ -199,14 +222,14 @@ def _stage_bands(cracks, stages, mixed):
     inputs = _typing_inputs(c, np.nan_to_num(c[col].to_numpy(float)))
     names = c["image"].astype(str).to_numpy()
     out = []
-    for used in stages:
+    for used in groups:
         ims = [_select(inputs, names == str(n)) for n in used]
         ims = [x for x in ims if len(x["area"])]
         if not ims:
             out.append(nan)
             continue
         sd = float(max(x["shift_sd"].max() for x in ims))
-        out.append(stage_band(ims, mixed=mixed, shift_sd=sd))
+        out.append(stage_band(ims, mixed=mixed, shift_sd=sd, statistic=statistic))
     return out
 
 
@@ -363,7 +386,7 @@ def damage_table(images, manifest=None, *, z=OUTLIER_Z, min_n=OUTLIER_MIN_N, cra
             area_T_um2=a_t, area_S_um2=a_s, n_low_confidence=n_low, P_status=status,
             P_note=note))
         used.append(keep.loc[fin, "image"].tolist())
-    for r, (lo, hi) in zip(rows, _stage_bands(cracks, used, mixed)):
+    for r, (lo, hi) in zip(rows, _bands(cracks, used, mixed)):
         r.update(P_mean_low=lo, P_mean_high=hi)
     dmg = pd.DataFrame(rows)
     if len(dmg):

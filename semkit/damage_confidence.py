@@ -170,14 +170,17 @@ def p_confidence(area, prob, *, trusted=None, group=None, mixed="exclude",
     return out
 
 
-def stage_band(images, *, mixed="exclude", shift_sd=0.0):
-    """Band of a stage's mean P (``P_mean`` of ``damage.csv``) from its images' typing.
+def stage_band(images, *, mixed="exclude", shift_sd=0.0, statistic="mean"):
+    """Band of a stage's mean P (``P_mean`` of ``damage.csv``) from its images' typing, or of
+    the pooled ratio of their summed areas.
 
     Each of ``N_DRAWS`` draws types every group of every image from its calibrated
     probabilities, as :func:`p_confidence` does, with one tensile-versus-shear log-odds shift
     for the whole stage in that draw: a stage's images come from one microscope and rock, so
     their leans are not independent either and averaging images does not remove it. Each
-    draw's mean is taken over the images with a finite P in that draw (as ``P_mean`` is).
+    draw's mean is taken over the images with a finite P in that draw (as ``P_mean`` is);
+    with ``statistic="pooled"`` each draw's sum A_T over sum A_S is taken instead (as
+    ``P_pooled`` is).
 
     Parameters
     ----------
@@ -188,11 +191,13 @@ def stage_band(images, *, mixed="exclude", shift_sd=0.0):
         As :func:`semkit.damage.image_damage`.
     shift_sd : float
         Standard deviation of the common lean (``type_shift_sd``).
+    statistic : {"mean", "pooled"}
+        The mean of the images' P, or the ratio of their summed areas.
 
     Returns
     -------
     low, high : float
-        The ``P_BAND`` quantiles of the mean over the draws; NaN where undefined (no image
+        The ``P_BAND`` quantiles of the statistic over the draws; NaN where undefined (no image
         with cracks, or more than 10 % of the draws without a finite P in any image for
         ``high``).
 
@@ -208,6 +213,8 @@ def stage_band(images, *, mixed="exclude", shift_sd=0.0):
     """
     if not shift_sd >= 0:
         raise InputError(f"shift_sd: expected a standard deviation >= 0, got {shift_sd}")
+    if statistic not in ("mean", "pooled"):
+        raise InputError(f"statistic: expected 'mean' or 'pooled', got {statistic!r}")
     shift = np.random.default_rng(_SEED + 1).standard_normal(N_DRAWS) * float(shift_sd)
     rng = np.random.default_rng(_SEED)
     draws = []
@@ -216,16 +223,19 @@ def stage_band(images, *, mixed="exclude", shift_sd=0.0):
                                        im.get("tensile_fraction"))
         if not len(t_area) or t_area.sum() <= 0:
             continue
-        a_t, a_s = _draw_areas(t_area, t_prob, mixed, t_tf, rng, shift=shift)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            draws.append(np.where(a_s > 0, a_t / a_s, np.inf))
+        draws.append(_draw_areas(t_area, t_prob, mixed, t_tf, rng, shift=shift))
     if not draws:
         return float("nan"), float("nan")
-    p = np.array(draws)
-    fin = np.isfinite(p)
-    n_fin = fin.sum(axis=0)
-    mean = np.where(n_fin > 0, np.where(fin, p, 0.0).sum(axis=0) / np.maximum(n_fin, 1),
-                    np.inf)
-    lo, hi = np.quantile(mean, P_BAND)
+    a_t, a_s = (np.array(x) for x in zip(*draws))          # images x draws
+    with np.errstate(divide="ignore", invalid="ignore"):
+        if statistic == "pooled":
+            stat = np.where(a_s.sum(axis=0) > 0, a_t.sum(axis=0) / a_s.sum(axis=0), np.inf)
+        else:
+            p = np.where(a_s > 0, a_t / a_s, np.inf)
+            fin = np.isfinite(p)
+            n_fin = fin.sum(axis=0)
+            stat = np.where(n_fin > 0, np.where(fin, p, 0.0).sum(axis=0)
+                            / np.maximum(n_fin, 1), np.inf)
+    lo, hi = np.quantile(stat, P_BAND)
     return (float(lo) if np.isfinite(lo) else float("nan"),
             float(hi) if np.isfinite(hi) else float("nan"))

@@ -137,6 +137,11 @@ def test_run_whole_chain_sets_sem_p_beside_simulated_p(tmp_path, capsys):
     row = next(r for r in run["P_sem"]["by_stage"] if r["stage"] == "failure")
     assert row["P_mean_low"] == pytest.approx(failure["P_mean_low"])
     assert 0 < row["P_mean_low"] < row["P_mean_high"] == pytest.approx(failure["P_mean_high"])
+    # the pooled SEM P's band: one loaded image, whose pooled ratio is the stage's mean, so
+    # the same draws give the same band
+    assert (run["P_sem"]["P_pooled_low"], run["P_sem"]["P_pooled_high"]) == pytest.approx(
+        (failure["P_mean_low"], failure["P_mean_high"]))
+    assert run["P_sem"]["P_pooled_low"] < run["P_sem"]["P_pooled"] < run["P_sem"]["P_pooled_high"]
     assert "simulated ucs" in capsys.readouterr().err
 
 

@@ -154,3 +154,18 @@ def test_a_stage_band_keeps_the_common_lean_that_averaging_images_does_not_remov
     _, dmg = damage_table(imgs, cracks=_typed_cracks(names, 2.0))
     fig = plot_p_by_stage(dmg, tmp_path / "p.png")
     assert any(len(c.get_segments()) == 1 for c in fig.axes[0].collections)   # the band bar
+
+
+def test_p_band_of_pooled_areas_counts_an_image_without_shear():
+    from semkit.damage import p_band
+    both = _typed_cracks(["b.tif"], 0.0)                    # P 1: 20 tensile, 20 shear
+    tensile = _typed_cracks(["t.tif"], 0.0).iloc[:20].assign(p_tensile=1.0, p_shear=0.0)
+    # t.tif: surely tensile only, no finite P in any draw
+    cracks = pd.concat([both, tensile], ignore_index=True)
+    lo_m, hi_m = p_band(cracks, ["b.tif", "t.tif"])         # P_mean: t.tif has no finite P
+    lo_p, hi_p = p_band(cracks, ["b.tif", "t.tif"], statistic="pooled")
+    assert lo_m < 1.0 < hi_m and lo_p < 2.0 < hi_p and lo_p > hi_m
+    assert p_band(cracks, ["b.tif"], statistic="pooled") == p_band(cracks, ["b.tif"])
+    assert np.isnan(p_band(cracks, ["absent.tif"])).all()
+    with pytest.raises(InputError, match="statistic"):
+        p_band(cracks, ["b.tif"], statistic="median")
