@@ -219,13 +219,15 @@ def _band_scene(seed):
     return (int((modes == 1).sum()) / n_s if n_s else float("nan")), a.typed_cracks
 
 
-def shift(n, jobs, n_band=40):
+def shift(n, jobs, model=None, n_band=40):
     """Fit ``image_shift_sd`` on held-out-settings renderings, write it into the model, and
-    check the P band's coverage on larger renderings (see the module docstring)."""
-    from semkit.classify.model import DEFAULT_POST_MODEL as model
-    from semkit.classify.model import fit_image_shift, save_model
+    check the P band's coverage on larger renderings (see the module docstring). ``model``:
+    the one just trained, else the model file as it is now (not the one imported with semkit,
+    which a training run in this process has replaced)."""
+    from semkit.classify.model import fit_image_shift, load_model, save_model
     from semkit.damage import image_damage
     from semkit.damage_confidence import P_SPREAD_MAX
+    model = load_model(MODEL) if model is None else model
     t0 = time.perf_counter()
     fit = fit_image_shift(collect("heldout", range(SHIFT_SEED0, SHIFT_SEED0 + n), jobs), model)
     model["image_shift_sd"] = round(fit["sd"], 3)
@@ -298,8 +300,7 @@ def main(argv=None):
     ap.add_argument("--jobs", type=int, default=2)
     a = ap.parse_args(argv)
     if a.what == "train":
-        train(a.n or 240, a.jobs)
-        shift(120, a.jobs)
+        shift(120, a.jobs, model=train(a.n or 240, a.jobs))
     elif a.what == "shift":
         shift(a.n or 120, a.jobs)
     elif a.what == "speed":

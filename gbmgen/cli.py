@@ -318,10 +318,9 @@ def _run(a):
     ts, ps = summary.get("test_summary") or {}, summary.get("P_sem") or {}
     if ts.get("P_sim") and ps.get("P_pooled") is not None:
         flag = "" if ps.get("P_status", "ok") == "ok" else f" [{ps['P_status']}]"
-        if ps.get("P_pooled_low") is not None:
-            hi = ps.get("P_pooled_high")
-            flag = (f" (band {ps['P_pooled_low']:.2f}-"
-                    + (f"{hi:.2f}" if hi is not None else "open") + ")" + flag)
+        from semkit.damage import band_text
+        band = band_text(ps.get("P_pooled_low"), ps.get("P_pooled_high"))
+        flag = (f" (band {band})" if band else "") + flag
         print(f"damage ratio P = A_T/A_S: SEM (pooled over loaded stages) {ps['P_pooled']:.2f}"
               f"{flag}   simulated {a.test} {ts['P_sim'].get('by_area', float('nan')):.2f}"
               " (by area)", file=sys.stderr)

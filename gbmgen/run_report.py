@@ -118,10 +118,10 @@ def write_run_report(out) -> tuple:
     how = "SEM: pooled over the loaded stages; simulated: broken-bond area, tension/shear"
     if psem.get("P_status", "ok") != "ok":
         how += f". SEM P is {psem['P_status']}: {psem.get('P_note') or 'see damage.csv'}"
-    if psem.get("P_pooled_low") is not None:
-        hi = psem.get("P_pooled_high")
-        how += (f". SEM typing band (10-90 %): {psem['P_pooled_low']:.3g}-"
-                + (f"{hi:.3g}" if hi is not None else "open"))
+    from semkit.damage import band_text
+    band = band_text(psem.get("P_pooled_low"), psem.get("P_pooled_high"))
+    if band:
+        how += f". SEM typing band (10-90 %): {band}"
     rows = [["damage ratio P = A_T/A_S (Equ. 3-1)", p_sem, p_sim.get("by_area"), how],
             ["MHI (Equ. 4-3)", run.get("MHI_target"), run.get("MHI_realised"),
              "measured: the grains.csv semkit wrote; simulated: the specimen's grains"],

@@ -194,16 +194,15 @@ def _p_lines(out):
     path = pathlib.Path(out) / "damage.csv"
     if not path.is_file():
         return []
+    from .damage import band_text
     d = pd.read_csv(path)
-    d = d[pd.to_numeric(d.get("P_mean"), errors="coerce").notna()]
+    d = d[d["P_mean"].notna()]
     lines = []
     for (spec, test), g in d.groupby(["specimen", "test"], sort=False):
         parts = []
         for r in g.itertuples():
-            lo, hi = getattr(r, "P_mean_low", float("nan")), getattr(r, "P_mean_high", float("nan"))
-            band = f" ({lo:.3g}-{hi:.3g})" if pd.notna(lo) and pd.notna(hi) else \
-                (f" ({lo:.3g}-open)" if pd.notna(lo) else "")
-            parts.append(f"{r.stage} {r.P_mean:.3g}{band}")
+            band = band_text(getattr(r, "P_mean_low", None), getattr(r, "P_mean_high", None))
+            parts.append(f"{r.stage} {r.P_mean:.3g}" + (f" ({band})" if band else ""))
         low = (g["P_status"].astype(str) == "low_confidence").any() if "P_status" in g else False
         lines.append(f"semkit: P = A_T/A_S, {spec} {test}, mean by stage (10-90 % typing band): "
                      + ", ".join(parts) + ("; low_confidence: quote the band (damage.csv "

@@ -23,7 +23,8 @@ from .errors import InputError
 from .indices import damage_ratio
 
 __all__ = ["p_status", "image_damage", "typed_areas", "darkness_fraction", "flag_outliers",
-           "damage_table", "p_band", "plot_p_by_stage", "STAGE_ORDER", "OUTLIER_Z", "OUTLIER_MIN_N"]
+           "damage_table", "p_band", "band_text", "plot_p_by_stage", "STAGE_ORDER", "OUTLIER_Z",
+           "OUTLIER_MIN_N"]
 
 #: Order of the loading stages on the P-by-stage plot and in ``damage.csv``.
 STAGE_ORDER = config.STAGE_ORDER
@@ -205,6 +206,22 @@ def p_band(cracks, images, *, statistic="mean", mixed="exclude"):
         NaN without typed cracks of these images.
     """
     return _bands(cracks, [list(images)], mixed, statistic)[0]
+
+
+def band_text(low, high, digits=3):
+    """``"low-high"`` of a P band to ``digits`` significant digits, ``"low-open"`` when its top
+    is undefined (too many draws without shear), ``""`` without a band (None or NaN).
+
+    Examples
+    --------
+    >>> band_text(1.0567, 58.9), band_text(2.1, float("nan")), band_text(None, None)
+    ('1.06-58.9', '2.1-open', '')
+    """
+    def given(v):
+        return v is not None and bool(np.isfinite(v))
+    if not given(low):
+        return ""
+    return f"{low:.{digits}g}-" + (f"{high:.{digits}g}" if given(high) else "open")
 
 
 def _bands(cracks, groups, mixed, statistic="mean"):

@@ -131,6 +131,8 @@ def p_confidence(area, prob, *, trusted=None, group=None, mixed="exclude",
     >>> p_confidence([100, 50], [[0.6, 0.4, 0], [0.4, 0.6, 0]])["low_confidence"]
     True
     """
+    if not shift_sd >= 0:
+        raise InputError(f"shift_sd: expected a standard deviation >= 0, got {shift_sd}")
     area = np.asarray(area, float)
     n = len(area)
     trusted = np.ones(n, bool) if trusted is None else np.asarray(trusted, bool)
@@ -138,8 +140,6 @@ def p_confidence(area, prob, *, trusted=None, group=None, mixed="exclude",
     out = dict(P_low=float("nan"), P_high=float("nan"), low_confidence=False, note="")
     if n == 0 or area.sum() <= 0:
         return out
-    if not shift_sd >= 0:
-        raise InputError(f"shift_sd: expected a standard deviation >= 0, got {shift_sd}")
     a_t, a_s = _draw_areas(t_area, t_prob, mixed, t_tf, np.random.default_rng(_SEED),
                            float(shift_sd))
     with np.errstate(divide="ignore", invalid="ignore"):

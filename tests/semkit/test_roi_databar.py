@@ -240,7 +240,8 @@ def test_bold_small_labels_with_touching_glyphs_are_read(face, thick, label, um)
                     cv2.LINE_AA)
         y = int(0.72 * len(bar))
         cv2.rectangle(bar, (380, y), (380 + 199, y + 3), 255, -1)
-        sb = read_scale_bar(*(lambda im: (im, find_data_bar(im)))(np.vstack([s.image, bar])))
+        img = np.vstack([s.image, bar])
+        sb = read_scale_bar(img, find_data_bar(img))
         assert sb.length_um == um and sb.length_px == 200, (height, sb.text)
 
 
