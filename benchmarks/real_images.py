@@ -72,7 +72,10 @@ def microct_scores(folder, **options):
     for f in sorted((folder / "images").glob("slice_*.png")):
         img = read_image(f)
         truth = read_image(folder / "masks" / f.name) > 0
-        a = analyse_image(img, name=f.name, pixel_size_source="default", **options)
+        # scored in pixels: the pixel size is given as 1 (not stated for these slices), so
+        # ``valid`` speaks of the detection, not of an unknown scale
+        a = analyse_image(img, name=f.name, pixel_size_um=1.0, pixel_size_source="cli",
+                          **options)
         row = a.summary()
         pred = a.full_size(a.crack_labels) > 0
         s = centreline_scores(pred, truth)
@@ -142,7 +145,8 @@ def obara_scores(folder, **options):
     from semkit.io import read_image
     out = {}
     for name, image, ref, bright in OBARA:
-        a = analyse_image(read_image(folder / image), name=image, pixel_size_source="default",
+        # scored in pixels: the pixel size (not stated) is given as 1
+        a = analyse_image(read_image(folder / image), name=image, pixel_size_source="cli",
                           bright_cracks=bright, **options)
         row = a.summary()
         s = centreline_scores(a.full_size(a.crack_labels) > 0, read_image(folder / ref) > 0)

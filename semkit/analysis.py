@@ -127,6 +127,8 @@ class CrackAnalysis:
             self._crop_data_bar()
         else:
             self.image = img
+        if self.pixel_size_source == "default" and not self.pixel_size_note:
+            self.pixel_size_note = _default_pixel_note(self.pixel_size_um, self.data_bar)
 
     # stage 1b: SEM data bar (cropped) and its scale bar
     def _crop_data_bar(self):
@@ -909,6 +911,16 @@ class CrackAnalysis:
             return 0.0, {}
         by_rule = (zone.groupby(why[zone.index])["area_px"].sum() / total).to_dict()
         return float(zone["area_px"].sum()) / total, by_rule
+
+
+def _default_pixel_note(pixel_size_um, data_bar):
+    """The ``pixel_size_note`` of an image whose pixel size is the default: every length and
+    area in µm is then in pixels scaled by a guess (the row is flagged)."""
+    where = ("a data bar was found but no scale bar in it" if data_bar is not None
+             else "no data bar or scale bar was found")
+    return (f"not known ({where}; none given in the manifest or on the command line, none "
+            f"in the file's metadata): {pixel_size_um:g} um/px assumed, figures in um and "
+            "per mm are in pixels scaled by it (give --pixel-size-um or a manifest)")
 
 
 def analyse_image(image, *, pixel_size_um=config.DEFAULT_PIXEL_SIZE_UM, name="",

@@ -187,6 +187,26 @@ def test_unreadable_label_is_not_used_and_is_said():
     assert "unreadable" in row["pixel_size_note"] and not row["valid"]
 
 
+def test_a_default_pixel_size_is_flagged_with_what_was_looked_for():
+    """With no pixel size given, none in the file and no scale bar read, the default is said
+    and the row is not valid: its figures in µm are pixels scaled by a guess. A data bar holding
+    no scale bar is named (a third generator's FEI-style bar once left such a row valid)."""
+    s = make_sem_image((384, 512), n_cracks=4, seed=9)
+    given = analyse_image(s.image, pixel_size_um=0.5, pixel_size_source="cli").summary()
+    assert given["valid"] and given["pixel_size_note"] == ""
+    bare = analyse_image(s.image, pixel_size_source="default").summary()
+    assert not bare["valid"] and "no data bar or scale bar was found" in bare["pixel_size_note"]
+    assert "1 um/px assumed" in bare["valid_note"]
+    bar = np.full((46, 512), 20, np.uint8)   # text only, no scale bar
+    cv2.putText(bar, "HV 15.00 kV  WD 10.1 mm", (10, 28), cv2.FONT_HERSHEY_SIMPLEX, 0.6, 230, 1,
+                cv2.LINE_AA)
+    row = analyse_image(np.vstack([s.image, bar]), pixel_size_source="default").summary()
+    assert row["data_bar_rows"] == "384-430" and row["pixel_size_source"] == "default"
+    assert not row["valid"] and "a data bar was found but no scale bar" in row["pixel_size_note"]
+    # the detection is the same: only the flag differs
+    assert row["n_cracks"] == given["n_cracks"] == bare["n_cracks"]
+
+
 _ALL_TEMPLATES = databar._templates
 
 
