@@ -1,4 +1,4 @@
-"""Benchmark: ``semkit analyse`` on a folder from the second held-out generator.
+"""Benchmark: ``semkit analyse`` on a folder from the second or third held-out generator.
 
 ``benchmarks/heldout_sem`` was written apart from semkit (its author read none of semkit's code,
 nor the first held-out generator ``benchmarks/heldout``): BSE and SE looks (edge-bright crack
@@ -7,6 +7,15 @@ a scale bar drawn in OpenCV's Hershey font, tensile / shear (stepped, layered, w
 mixed cracks with branches. Its images are written to a folder as a user's would be and analysed
 there with the default options as post-test images (``manifest.csv``: stage ``failure``; the
 pixel size given, except for images with an information bar, whose scale bar is to be read).
+
+``--generator heldout_gen3`` uses the third held-out generator, ``benchmarks/heldout_gen3``,
+written apart from semkit and from both other generators: five rock types (granite, sandstone,
+marble, shale, basalt) as grain mosaics with mineral textures, dark look-alike phases (organic
+lenses, graphite, mica), compact pores, polishing scratches, relief shading at phase boundaries,
+an SE-like look on about 30 %, sub-pixel to 10-px openings, tensile / stepped, layered and
+en-echelon shear with gouge / mixed cracks with bridges and branches, detector lag, Poisson-Gaussian
+and scan-line noise, JPEG round trips, 16-bit files with a narrow used range, and FEI, Zeiss and
+JEOL style information bars (Hershey labels with a drawn µ). Its JSON is ``heldout_gen3[_seed<N>]``.
 
 Errors are against the exact truth (coverage area, mid-line length of every open trace, P =
 tensile / shear area), in physical units with the *true* pixel size, so a scale bar misread
@@ -19,7 +28,8 @@ template font (fonts without templates: ``scale_bar_fonts.py``).
 
 Writes ``benchmarks/semkit_results/heldout_sem[_seed<N>].json`` and prints a markdown table.
 
-Run: ``python benchmarks/heldout_sem_semkit.py [--n 40] [--seed0 0] [--jobs 2]``
+Run: ``python benchmarks/heldout_sem_semkit.py [--n 40] [--seed0 0] [--jobs 2]
+[--generator heldout_sem|heldout_gen3]``
 """
 from __future__ import annotations
 
@@ -40,6 +50,9 @@ import pandas as pd
 ROOT = pathlib.Path(__file__).resolve().parent
 OUT = ROOT / "semkit_results"
 WRONG = 0.25
+#: the held-out generators (folders under benchmarks/ with a make_set.py) and their JSON names
+PREFIX = {"heldout_sem": "heldout_sem", "heldout_gen3": "heldout_gen3"}
+GENERATORS = tuple(PREFIX)
 
 
 def _given(col):
@@ -52,12 +65,14 @@ def main(argv=None):
     ap.add_argument("--n", type=int, default=40)
     ap.add_argument("--seed0", type=int, default=0)
     ap.add_argument("--jobs", type=int, default=2)
+    ap.add_argument("--generator", choices=GENERATORS, default="heldout_sem",
+                    help="the generator's folder under benchmarks/ (its make_set.py)")
     args = ap.parse_args(argv)
     from semkit.workflow import analyse_folder
     tmp = pathlib.Path(tempfile.mkdtemp(prefix="heldout_sem_"))
     try:
         imgs = tmp / "images"
-        subprocess.run([sys.executable, str(ROOT / "heldout_sem" / "make_set.py"), str(imgs),
+        subprocess.run([sys.executable, str(ROOT / args.generator / "make_set.py"), str(imgs),
                         "--n", str(args.n), "--seed0", str(args.seed0)], check=True,
                        stdout=subprocess.DEVNULL)
         truth = pd.read_csv(imgs / "truth.csv")
@@ -81,6 +96,9 @@ def main(argv=None):
     m["area_err"] = m.crack_area_um2 / ps ** 2 / m.area_px - 1
     m["length_err"] = m.crack_length_um / ps / m.length_px - 1
     m["pixel_size_err"] = m.pixel_size_um / ps - 1
+    # the same in pixels: the detection's error, whatever scale was read
+    m["area_err_px"] = (1 + m.area_err) / (1 + m.pixel_size_err) ** 2 - 1
+    m["length_err_px"] = (1 + m.length_err) / (1 + m.pixel_size_err) - 1
     m["P_err"] = m.P / m.P_true - 1
     valid = m.valid.astype(bool)
     wrong = valid & ((m.area_err.abs() > WRONG) | (m.length_err.abs() > WRONG))
@@ -95,6 +113,10 @@ def main(argv=None):
         area_err_max=float(m.area_err.abs().max()),
         length_err_median=float(m.length_err.abs().median()),
         length_err_max=float(m.length_err.abs().max()),
+        area_err_px_median=float(m.area_err_px.abs().median()),
+        area_err_px_signed_median=float(m.area_err_px.median()),
+        length_err_px_median=float(m.length_err_px.abs().median()),
+        length_err_px_signed_median=float(m.length_err_px.median()),
         n_valid=int(valid.sum()),
         area_err_median_valid=float(m.area_err[valid].abs().median()),
         length_err_median_valid=float(m.length_err[valid].abs().median()),
@@ -118,13 +140,14 @@ def main(argv=None):
                  stage_P_mean_high=float(stage.P_mean_high),
                  stage_P_true_mean=float(used.P_true.mean()),
                  stage_P_status=str(stage.P_status))
-    cols = ["image", "seed", "has_bar", "area_err", "length_err", "pixel_size_err",
+    cols = ["image", "seed", "has_bar", "area_err", "length_err", "area_err_px", "length_err_px",
+            "pixel_size_err",
             "pixel_size_source", "P_true", "P", "P_low", "P_high", "P_status", "valid",
             "valid_note", "pixel_size_note", "data_bar_rows"]
     meta = dict(machine=platform.machine(), cpus=os.cpu_count(), load=os.getloadavg(),
-                seed0=args.seed0, python=platform.python_version())
+                seed0=args.seed0, generator=args.generator, python=platform.python_version())
     OUT.mkdir(parents=True, exist_ok=True)
-    name = "heldout_sem" + (f"_seed{args.seed0}" if args.seed0 else "") + ".json"
+    name = PREFIX[args.generator] + (f"_seed{args.seed0}" if args.seed0 else "") + ".json"
     rows = json.loads(m[cols].to_json(orient="records"))
     (OUT / name).write_text(json.dumps(dict(meta=meta, summary=s, per_image=rows), indent=1))
     print(f"{s['n_images']} images, {s['megapixels']:.1f} MP (seeds {args.seed0}-"
@@ -134,6 +157,10 @@ def main(argv=None):
           f"{s['area_err_median_valid']:.1%} |")
     print(f"| length error | {s['length_err_median']:.1%} | {s['length_err_max']:.0%} | "
           f"{s['length_err_median_valid']:.1%} |")
+    print(f"| in pixels (any scale read): area | {s['area_err_px_median']:.1%} "
+          f"(signed {s['area_err_px_signed_median']:+.1%}) | | |")
+    print(f"| in pixels: length | {s['length_err_px_median']:.1%} "
+          f"(signed {s['length_err_px_signed_median']:+.1%}) | | |")
     print(f"\nvalid: {s['n_valid']} of {s['n_images']}; confidently wrong (valid, area or length "
           f"off by > {WRONG:.0%}): {s['confidently_wrong'] or 'none'}")
     print(f"information bars: {s['n_with_bar']}; scale read right {s['n_bar_scale_read_right']}, "
