@@ -710,6 +710,12 @@ class CrackAnalysis:
             notes.append(f"faint lines: {faint:.0%} of the crack centreline lies less than "
                          f"{config.FAINT_LINE_DEPTH:g} of the crack contrast below its "
                          "surroundings (grain boundaries or faint cracks): check the overlay")
+        thin = self._thin_length_share()
+        if thin >= config.THIN_MAX_LENGTH_SHARE:
+            notes.append(f"thin cracks: {thin:.0%} of the crack centreline lies in cracks under "
+                         f"{config.THIN_POPULATION_WIDTH_PX:g} px wide: the cracks reach the "
+                         "detection limit (a thin crack under blur is faint), so thinner ones "
+                         "are likely missed: length and area are lower bounds")
         speck = self._speckle_length_share()
         if speck >= config.SPECKLE_MAX_LENGTH_SHARE:
             win = config.ZONE_NEIGHBOUR_WINDOW_PX
@@ -836,6 +842,19 @@ class CrackAnalysis:
         short = (length < config.SPECKLE_MAX_LENGTH_PX) & (crowd >= config.SPECKLE_MIN_NEIGHBOURS)
         total = float(length.sum())
         return float(length[short].sum()) / total if total > 0 else 0.0
+
+    def _thin_length_share(self):
+        """Share of the crack centreline length (:func:`_centreline_px`) in cracks whose mean
+        width (``area_px`` over centreline) is under ``THIN_POPULATION_WIDTH_PX``: how much of
+        the crack population lies near the detection limit (0 without a length)."""
+        if self.cracks.empty or not self.options.length:
+            return 0.0
+        c = self.cracks
+        length = _centreline_px(c)
+        width = c["area_px"].to_numpy(float) / np.maximum(length, 1.0)
+        total = float(length.sum())
+        return float(length[width < config.THIN_POPULATION_WIDTH_PX].sum()) / total \
+            if total > 0 else 0.0
 
     def _continuation_share(self):
         """Pixels of ridge lines that touch a detected object but run on more than 2 px

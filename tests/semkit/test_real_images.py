@@ -64,15 +64,18 @@ def test_microct_surround_is_never_a_crack(microct):
     # plateaus: contrast 10.4 noise sigmas), faint lines (slices 0 and 5: a fifth or more of
     # their length in the dark rims of bright inclusions, F1 0.78 and 0.78, length 1.27x and
     # 1.32x the truth) or a darkest "mineral" lying largely in long narrow objects (slice 504's
-    # wide fracture)
+    # wide fracture); two more for thin cracks, 30-31 % of their length under 2 px wide: slices
+    # 163 and 176, whose reported length is 0.62x and 0.68x the truth (a lower bound, as said)
     assert microct.valid_note.str.contains("bright walls: ").all()
     notes = microct.valid_note.str.split("; ").map(
         lambda ns: "; ".join(n for n in ns if not n.startswith("bright walls: ")))
     flagged = microct.assign(valid_note=notes)[notes != ""]
-    assert len(flagged) <= 3, flagged.image.tolist()
+    thin = flagged.valid_note.str.contains("thin cracks: ")
+    assert len(flagged[~thin]) <= 3, flagged.image.tolist()
+    assert (flagged.reported_length_ratio[thin] < 0.75).all(), flagged[thin].image.tolist()
     noisy = flagged.valid_note.str.startswith("noise:")
     assert (flagged.contrast_to_noise[noisy] < config.MIN_CONTRAST_TO_NOISE).all()
-    assert (noisy | flagged.valid_note.str.contains("long objects")
+    assert (noisy | thin | flagged.valid_note.str.contains("long objects")
             | flagged.valid_note.str.startswith("faint lines:")).all()
     assert microct.reported_area_ratio.max() <= MICROCT_AREA_RATIO_MAX
     assert np.isfinite(microct.f1).all()
