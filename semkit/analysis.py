@@ -715,7 +715,8 @@ class CrackAnalysis:
             notes.append(f"thin cracks: {thin:.0%} of the crack centreline lies in cracks under "
                          f"{config.THIN_POPULATION_WIDTH_PX:g} px wide: the cracks reach the "
                          "detection limit (a thin crack under blur is faint), so thinner ones "
-                         "are likely missed: length and area are lower bounds")
+                         "are likely missed (length is then a lower bound) and areas rest on "
+                         "partial volumes")
         speck = self._speckle_length_share()
         if speck >= config.SPECKLE_MAX_LENGTH_SHARE:
             win = config.ZONE_NEIGHBOUR_WINDOW_PX
