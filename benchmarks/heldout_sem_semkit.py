@@ -26,7 +26,7 @@ a fresh range (``--seed0``) is the held-out figure for those. The OCR's template
 Hershey faces, the generator's label font: its bars test the bar finding and the reading of a
 template font (fonts without templates: ``scale_bar_fonts.py``).
 
-Writes ``benchmarks/semkit_results/heldout_sem[_seed<N>].json`` and prints a markdown table.
+Writes ``benchmarks/semkit_results/<generator>[_seed<N>].json`` and prints a markdown table.
 
 Run: ``python benchmarks/heldout_sem_semkit.py [--n 40] [--seed0 0] [--jobs 2]
 [--generator heldout_sem|heldout_gen3]``
@@ -50,9 +50,8 @@ import pandas as pd
 ROOT = pathlib.Path(__file__).resolve().parent
 OUT = ROOT / "semkit_results"
 WRONG = 0.25
-#: the held-out generators (folders under benchmarks/ with a make_set.py) and their JSON names
-PREFIX = {"heldout_sem": "heldout_sem", "heldout_gen3": "heldout_gen3"}
-GENERATORS = tuple(PREFIX)
+#: the held-out generators: folders under benchmarks/ with a make_set.py, and their JSON names
+GENERATORS = ("heldout_sem", "heldout_gen3")
 
 
 def _given(col):
@@ -147,7 +146,7 @@ def main(argv=None):
     meta = dict(machine=platform.machine(), cpus=os.cpu_count(), load=os.getloadavg(),
                 seed0=args.seed0, generator=args.generator, python=platform.python_version())
     OUT.mkdir(parents=True, exist_ok=True)
-    name = PREFIX[args.generator] + (f"_seed{args.seed0}" if args.seed0 else "") + ".json"
+    name = args.generator + (f"_seed{args.seed0}" if args.seed0 else "") + ".json"
     rows = json.loads(m[cols].to_json(orient="records"))
     (OUT / name).write_text(json.dumps(dict(meta=meta, summary=s, per_image=rows), indent=1))
     print(f"{s['n_images']} images, {s['megapixels']:.1f} MP (seeds {args.seed0}-"
