@@ -292,6 +292,9 @@ GMM_ITERATIONS = 100
 # damage
 #: Order of the loading stages on the P-by-stage plot and in ``damage.csv``.
 STAGE_ORDER = ("pre-test", "initiating", "propagation", "failure")
+#: the tensile-versus-shear direction (tensile, shear, mixed) of an image's common log-odds lean:
+#: fitted by semkit.classify.model.fit_image_shift, drawn by semkit.damage_confidence.
+TYPE_SHIFT_DIRECTION = (0.5, -0.5, 0.0)
 #: Modified z-score above which an image's P is flagged as an outlier.
 OUTLIER_Z = 3.5
 #: Fewest finite P values in a test for the outlier rule to apply.

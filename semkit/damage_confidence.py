@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from . import config
 from .errors import InputError
 
 __all__ = ["p_confidence", "stage_band", "N_DRAWS", "P_BAND", "P_SPREAD_MAX", "UNTRUSTED_AREA_MAX"]
@@ -53,7 +54,7 @@ def _draw_areas(area, prob, mixed, tensile_fraction, rng, shift_sd=0.0, shift=No
     if shift is None and shift_sd > 0:
         shift = rng.standard_normal(N_DRAWS) * shift_sd
     if shift is not None:
-        p = p * np.exp(np.outer(shift, [0.5, -0.5, 0.0]))[:, None, :]
+        p = p * np.exp(np.outer(shift, config.TYPE_SHIFT_DIRECTION))[:, None, :]
         p = p / np.maximum(p.sum(axis=2, keepdims=True), 1e-300)
     cum = np.cumsum(p, axis=2)
     k = (u[:, :, None] > cum[:, :, :-1]).sum(axis=2)   # 0 tensile, 1 shear, 2 mixed

@@ -31,6 +31,7 @@ import os
 
 import numpy as np
 
+from .. import config
 from ..errors import InputError
 from .morphology import FEATURE_NAMES, LOCAL_NAMES, crack_morphology, group_quantile
 
@@ -269,7 +270,7 @@ def calibrate(model, samples):
 #: Gauss-Hermite nodes of the marginal likelihood in :func:`fit_image_shift`.
 _SHIFT_NODES = 41
 #: the tensile-versus-shear direction of an image's log-odds shift (tensile, shear, mixed).
-SHIFT_DIRECTION = (0.5, -0.5, 0.0)
+SHIFT_DIRECTION = config.TYPE_SHIFT_DIRECTION
 
 
 def _shift_nll(sd, per_image):
